@@ -1,0 +1,29 @@
+"""Column layout of the arrays the kernels share with the layers above.
+
+Kept in one place so that the table packer, the kernels and the environment agree on what each
+column means. Units are SI throughout: metres, seconds, radians.
+"""
+
+# Ball state, array of shape (n_envs, BALL_STATE_SIZE), float64.
+BALL_X = 0  # centre x [m], to the right
+BALL_Y = 1  # centre y [m], up the playfield (towards the top of the table)
+BALL_VX = 2  # velocity x [m/s]
+BALL_VY = 3  # velocity y [m/s]
+BALL_SPIN = 4  # angular velocity about the playfield normal [rad/s], counter-clockwise positive
+BALL_STATE_SIZE = 5
+
+# Surface properties of every element (segments, circles), array of shape (n, PROP_SIZE).
+PROP_RESTITUTION = 0  # coefficient of restitution of the normal velocity [-]
+PROP_FRICTION = 1  # Coulomb friction coefficient ball/surface [-]
+PROP_KICK = 2  # speed added along the contact normal on every impact [m/s] (bumpers, slingshots)
+PROP_SIZE = 3
+
+# Segment geometry, array of shape (n_segments, 4): x0, y0, x1, y1 [m].
+# Circle geometry, array of shape (n_circles, 3): x, y, radius [m].
+
+# Contact log, one row per contact, array of shape (n_envs, capacity, CONTACT_SIZE).
+# Element ids are global: segments first, then circles (then flippers, when they exist).
+CONTACT_ELEMENT = 0  # global element id (stored as float, exact for any realistic count)
+CONTACT_TIME = 1  # time of the contact since the start of the step [s]
+CONTACT_SPEED = 2  # normal approach speed relative to the surface before the response [m/s]
+CONTACT_SIZE = 3
