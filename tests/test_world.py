@@ -205,8 +205,9 @@ def test_inactive_ball_is_left_untouched():
 
 def test_contact_log_overflow_counts_but_does_not_overrun():
     # Fast ball across a narrow channel: more bounces in one frame than the log holds.
+    right = 0.1 + 2 * RADIUS + 0.001
     world = make_world(
-        [[[0.1, 0.2], [0.1, 0.9]], [[0.1 + 2 * RADIUS + 0.001, 0.2], [0.1 + 2 * RADIUS + 0.001, 0.9]]],
+        [[[0.1, 0.2], [0.1, 0.9]], [[right, 0.2], [right, 0.9]]],
         slope_deg=0.0, restitution=1.0, substeps=40, max_passes=16,
     )  # fmt: skip
     world.place_ball(0, (0.1 + RADIUS + 0.0005, 0.5), (60.0, 0.0))
