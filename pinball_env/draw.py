@@ -1,0 +1,115 @@
+"""Draw a table, and optionally a ball's path on it, to PNG: ``python -m pinball_env.draw``.
+
+Examples::
+
+    python -m pinball_env.draw box --out outputs/box.png
+    python -m pinball_env.draw box --trace 600 --velocity 2.5 1.0 --out outputs/trace.png
+
+Needs matplotlib (``pip install -e ".[plot]"``).
+"""
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from pinball_env.table import Table, load_table
+from pinball_env.world import World
+
+WALL_COLOUR = "#1d3557"
+ONE_SIDED_COLOUR = "#e76f51"
+POST_COLOUR = "#2a9d8f"
+
+
+def _pyplot():
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as error:  # pragma: no cover - depends on the install
+        raise ImportError('drawing tables needs matplotlib: pip install -e ".[plot]"') from error
+    return plt
+
+
+def draw_table(ax, table: Table) -> None:
+    """Draw walls (one-sided ones with an arrow on their blocking side), posts and the start."""
+    from matplotlib.patches import Circle
+
+    for wall in table.walls:
+        colour = ONE_SIDED_COLOUR if wall.one_sided else WALL_COLOUR
+        for x0, y0, x1, y1 in wall.segments():
+            ax.plot([x0, x1], [y0, y1], color=colour, lw=2, solid_capstyle="round")
+            if wall.one_sided:
+                # The normal rot+90(P1 - P0) points to the side the segment blocks.
+                length = math.hypot(x1 - x0, y1 - y0)
+                nx, ny = -(y1 - y0) / length, (x1 - x0) / length
+                mx, my = (x0 + x1) / 2, (y0 + y1) / 2
+                arrow = 2 * table.ball.radius
+                ax.annotate(
+                    "", (mx + nx * arrow, my + ny * arrow), (mx, my),
+                    arrowprops={"arrowstyle": "->", "color": colour},
+                )  # fmt: skip
+    for post in table.posts:
+        ax.add_patch(Circle(post.center, post.radius, color=POST_COLOUR, alpha=0.85))
+    ax.add_patch(Circle(table.ball.start, table.ball.radius, fill=False, ls="--", color="grey"))
+    ax.set_xlim(0, table.width)
+    ax.set_ylim(0, table.height)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m] (up the table)")
+    ax.set_title(
+        f"{table.name}: {table.width:g} m x {table.height:g} m, slope {table.slope_deg:g} deg"
+    )
+
+
+def draw_path(ax, path: np.ndarray, frame_rate: float) -> None:
+    """Draw a ball path (n, 2) coloured by time."""
+    times = np.arange(len(path)) / frame_rate
+    points = ax.scatter(path[:, 0], path[:, 1], c=times, s=3, cmap="viridis", zorder=3)
+    ax.figure.colorbar(points, ax=ax, label="time [s]", shrink=0.6)
+
+
+def render(
+    table: Table,
+    out: Path,
+    trace_frames: int = 0,
+    velocity: tuple[float, float] | None = None,
+) -> Path:
+    """Write a PNG of ``table``, with the path of a ball over ``trace_frames`` frames if > 0."""
+    plt = _pyplot()
+    aspect = table.height / table.width
+    fig, ax = plt.subplots(figsize=(4.2, 4.2 * aspect * 0.9 + 0.6))
+    draw_table(ax, table)
+    if trace_frames > 0:
+        world = World(table)
+        world.place_ball(0, table.ball.start, velocity or table.ball.velocity)
+        path = np.vstack([world.balls[0, :2], world.trace(trace_frames)])
+        draw_path(ax, path, table.simulation.frame_rate)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
+def main(argv: list[str] | None = None) -> Path:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("table", nargs="?", default="box", help="table name or YAML path")
+    parser.add_argument("--out", type=Path, default=Path("outputs/table.png"))
+    parser.add_argument(
+        "--trace", type=int, default=0, metavar="FRAMES", help="simulate the ball for FRAMES"
+    )
+    parser.add_argument(
+        "--velocity", type=float, nargs=2, metavar=("VX", "VY"), help="launch velocity [m/s]"
+    )
+    args = parser.parse_args(argv)
+    velocity = tuple(args.velocity) if args.velocity else None
+    out = render(load_table(args.table), args.out, args.trace, velocity)
+    print(f"wrote {out}")
+    return out
+
+
+if __name__ == "__main__":
+    main()
