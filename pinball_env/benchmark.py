@@ -36,13 +36,13 @@ def measure(table: str, n_envs: int, frames: int, max_speed: float, seed: int) -
     random_launches(world, rng, max_speed)
     world.step()  # compile (or load the cached kernel) outside the timing
     random_launches(world, rng, max_speed)
-    elements = world.packed.segments.shape[0] + world.packed.circles.shape[0]
+    elements = len(world.packed.element_names) - world.packed.sensors.shape[0]
     substeps = world.table.simulation.substeps
     contacts = 0
     start = time.perf_counter()
     for _ in range(frames):
         world.step()
-        contacts += int(world.contact_count.sum())
+        contacts += int(world.state.contact_count.sum())
     seconds = time.perf_counter() - start
     ball_frames = n_envs * frames
     # One pass per substep plus one more after each contact (the sweep of the remaining time).

@@ -1,10 +1,12 @@
 """Pinball tables: load a YAML description, validate it strictly, pack it for the kernels.
 
-A table file describes the playfield in SI units (metres, seconds; only the slope is in degrees)
-in the table frame: origin at the bottom-left corner, x to the right, y up the table. See
-``configs/tables/box.yaml`` for an annotated example. Every mistake in a file (unknown or missing
-key, wrong type, non-finite or out-of-range number, bad geometry) raises :class:`TableError` with
-the file name, the path of the element and the problem; nothing is silently defaulted.
+A table file describes the playfield in SI units (metres, seconds; only the slope and the flipper
+angles are in degrees) in the table frame: origin at the bottom-left corner, x to the right, y up
+the table. See ``configs/tables/box.yaml`` (a plain box) and ``configs/tables/classic.yaml`` (a
+full table with flippers, sensors and a plunger) for annotated examples. Every mistake in a file
+(unknown or missing key, wrong type, non-finite or out-of-range number, bad geometry) raises
+:class:`TableError` with the file name, the path of the element and the problem; nothing is
+silently defaulted.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ class TableError(ValueError):
 
 @dataclass(frozen=True)
 class Material:
-    """Surface properties shared by walls and posts."""
+    """Surface properties shared by walls, posts and flippers."""
 
     name: str
     restitution: float  # coefficient of restitution of the normal velocity [-]
@@ -56,6 +58,7 @@ class Wall:
     closed: bool = False  # adds the segment last point -> first point
     one_sided: bool = False  # only stops a ball coming from the left of P0 -> P1
     kick: float = 0.0  # speed added along the normal on every impact [m/s] (slingshots)
+    score: int = 0  # points per hit [-]
 
     def segments(self) -> tuple[tuple[float, float, float, float], ...]:
         """Segments (x0, y0, x1, y1) in order, the closing one last."""
@@ -72,6 +75,72 @@ class Post:
     radius: float
     material: str
     kick: float = 0.0  # speed added along the normal on every impact [m/s] (pop bumpers)
+    score: int = 0  # points per hit [-]
+
+
+# Flipper buttons, in the order of their action bits.
+_BUTTONS = ("left", "right")
+
+
+@dataclass(frozen=True)
+class Flipper:
+    """A flipper: a tapered capsule turning about its pivot between two stops.
+
+    The base circle (``base_radius``) is centred on the pivot, the tip circle (``tip_radius``)
+    ``length`` away along the flipper's angle; their common tangents join them. Angles are kept in
+    degrees as written in the file, counter-clockwise from +x.
+    """
+
+    name: str
+    pivot: tuple[float, float]  # centre of rotation and of the base circle [m]
+    length: float  # pivot to tip-circle centre [m]
+    base_radius: float  # radius of the circle around the pivot [m]
+    tip_radius: float  # radius of the circle at the tip [m]
+    rest_angle: float  # direction pivot -> tip when released [deg]
+    up_angle: float  # direction pivot -> tip when energised [deg]
+    stroke_time: float  # time to swing from rest to up [s]
+    return_time: float  # time to swing from up back to rest [s]
+    material: str  # name of a material [-]
+    button: str  # action bit that energises it: "left" or "right" [-]
+    score: int = 0  # points per hit [-]
+
+    @property
+    def swing(self) -> float:
+        """Angle swept between the two stops [rad]."""
+        return math.radians(abs(self.up_angle - self.rest_angle))
+
+    @property
+    def up_speed(self) -> float:
+        """Angular speed of the upstroke [rad/s]."""
+        return self.swing / self.stroke_time
+
+    @property
+    def down_speed(self) -> float:
+        """Angular speed of the return [rad/s]."""
+        return self.swing / self.return_time
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """A line the ball rolls over (rollover, drain); a crossing of the ball's centre is an event."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # the two ends [m]
+    drain: bool = False  # a crossing takes the ball out of play [-]
+    score: int = 0  # points per crossing [-]
+
+    @property
+    def segment(self) -> tuple[float, float, float, float]:
+        """The line as (x0, y0, x1, y1) [m]."""
+        return (*self.points[0], *self.points[1])
+
+
+@dataclass(frozen=True)
+class Plunger:
+    """How a ball is put into play from the shooter lane."""
+
+    position: tuple[float, float]  # ball centre at rest on the plunger [m]
+    speed: tuple[float, float]  # launch speed range (min, max), straight up the table [m/s]
 
 
 @dataclass(frozen=True)
@@ -104,8 +173,15 @@ class PackedTable:
     segment_one_sided: np.ndarray  # (S,) bool
     circles: np.ndarray  # (C, 3) float64: x, y, radius
     circle_props: np.ndarray  # (C, layout.PROP_SIZE) float64
-    element_names: tuple[str, ...]  # global element id -> name: segments, then circles
+    # global element id -> name: segments ("wall[i]"), then circles, flippers and sensors
+    element_names: tuple[str, ...]
     gravity: np.ndarray  # (2,) float64 [m/s^2], in the playfield plane
+    flippers: np.ndarray  # (F, layout.FLIPPER_SIZE) float64, columns layout.FLIPPER_*
+    flipper_props: np.ndarray  # (F, layout.PROP_SIZE) float64 (kick 0)
+    flipper_buttons: tuple[int, ...]  # (F,) action bit per flipper: 0 "left", 1 "right"
+    sensors: np.ndarray  # (K, 4) float64: x0, y0, x1, y1
+    sensor_drain: np.ndarray  # (K,) bool
+    element_scores: np.ndarray  # (S + C + F + K,) int64 points per hit, by global element id
 
 
 @dataclass(frozen=True)
@@ -119,6 +195,9 @@ class Table:
     materials: tuple[Material, ...]
     walls: tuple[Wall, ...] = ()
     posts: tuple[Post, ...] = ()
+    flippers: tuple[Flipper, ...] = ()
+    sensors: tuple[Sensor, ...] = ()
+    plunger: Plunger | None = None  # None: the ball is only ever placed at ball.start
     slope_deg: float = 6.5  # inclination of the playfield [deg]
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
@@ -146,16 +225,32 @@ class Table:
             row[layout.PROP_KICK] = kick
             return row
 
-        segments, segment_props, one_sided, names = [], [], [], []
+        segments, segment_props, one_sided, names, scores = [], [], [], [], []
         for wall in self.walls:
             for i, segment in enumerate(wall.segments()):
                 segments.append(segment)
                 segment_props.append(props(wall.material, wall.kick))
                 one_sided.append(wall.one_sided)
                 names.append(f"{wall.name}[{i}]")
+                scores.append(wall.score)
         circles = [(*post.center, post.radius) for post in self.posts]
         circle_props = [props(post.material, post.kick) for post in self.posts]
-        names.extend(post.name for post in self.posts)
+        flippers = []
+        for flipper in self.flippers:
+            row = [0.0] * layout.FLIPPER_SIZE
+            row[layout.FLIPPER_PIVOT_X], row[layout.FLIPPER_PIVOT_Y] = flipper.pivot
+            row[layout.FLIPPER_LENGTH] = flipper.length
+            row[layout.FLIPPER_BASE_RADIUS] = flipper.base_radius
+            row[layout.FLIPPER_TIP_RADIUS] = flipper.tip_radius
+            row[layout.FLIPPER_REST_ANGLE] = math.radians(flipper.rest_angle)
+            row[layout.FLIPPER_UP_ANGLE] = math.radians(flipper.up_angle)
+            row[layout.FLIPPER_UP_SPEED] = flipper.up_speed
+            row[layout.FLIPPER_DOWN_SPEED] = flipper.down_speed
+            flippers.append(row)
+        flipper_props = [props(flipper.material, 0.0) for flipper in self.flippers]
+        for elements in (self.posts, self.flippers, self.sensors):
+            names.extend(element.name for element in elements)
+            scores.extend(element.score for element in elements)
         return PackedTable(
             segments=_frozen_array(segments, np.float64, (-1, 4)),
             segment_props=_frozen_array(segment_props, np.float64, (-1, layout.PROP_SIZE)),
@@ -164,6 +259,12 @@ class Table:
             circle_props=_frozen_array(circle_props, np.float64, (-1, layout.PROP_SIZE)),
             element_names=tuple(names),
             gravity=_frozen_array(self.gravity_vector, np.float64, (2,)),
+            flippers=_frozen_array(flippers, np.float64, (-1, layout.FLIPPER_SIZE)),
+            flipper_props=_frozen_array(flipper_props, np.float64, (-1, layout.PROP_SIZE)),
+            flipper_buttons=tuple(_BUTTONS.index(flipper.button) for flipper in self.flippers),
+            sensors=_frozen_array([s.segment for s in self.sensors], np.float64, (-1, 4)),
+            sensor_drain=_frozen_array([s.drain for s in self.sensors], np.bool_, (-1,)),
+            element_scores=_frozen_array(scores, np.int64, (-1,)),
         )
 
 
@@ -220,11 +321,15 @@ def _mapping(
     return value
 
 
-def _list(value: object, loc: _Loc, min_len: int = 0) -> list[Any]:
+def _list(value: object, loc: _Loc, min_len: int = 0, max_len: int | None = None) -> list[Any]:
     if not isinstance(value, (list, tuple)):
         loc.fail(f"expected a list, got {_describe(value)}")
+    if min_len == max_len and len(value) != min_len:
+        loc.fail(f"expected exactly {min_len} items, got {len(value)}")
     if len(value) < min_len:
         loc.fail(f"expected at least {min_len} items, got {len(value)}")
+    if max_len is not None and len(value) > max_len:
+        loc.fail(f"expected at most {max_len} items, got {len(value)}")
     return list(value)
 
 
@@ -232,6 +337,12 @@ def _string(value: object, loc: _Loc) -> str:
     if not isinstance(value, str) or not value:
         loc.fail(f"expected a non-empty string, got {_describe(value)}")
     return value
+
+
+def _choice(value: object, loc: _Loc, options: tuple[str, ...]) -> str:
+    if value not in options:
+        loc.fail(f"expected one of {', '.join(map(repr, options))}, got {_describe(value)}")
+    return str(value)
 
 
 def _flag(value: object, loc: _Loc) -> bool:
@@ -280,11 +391,11 @@ def _parses_as_float(text: str) -> bool:
     return True
 
 
-def _pair(value: object, loc: _Loc) -> tuple[float, float]:
-    """An [x, y] pair of finite numbers."""
+def _pair(value: object, loc: _Loc, item: Parser = _number) -> tuple[Any, Any]:
+    """An [x, y] pair of finite numbers (or of whatever ``item`` parses)."""
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         loc.fail(f"expected a pair [x, y], got {_describe(value)}")
-    return (_number(value[0], loc.index(0)), _number(value[1], loc.index(1)))
+    return (item(value[0], loc.index(0)), item(value[1], loc.index(1)))
 
 
 def _point(value: object, loc: _Loc, width: float, height: float) -> tuple[float, float]:
@@ -293,6 +404,20 @@ def _point(value: object, loc: _Loc, width: float, height: float) -> tuple[float
     if not (0.0 <= x <= width and 0.0 <= y <= height):
         loc.fail(f"point ({x:g}, {y:g}) is outside the playfield [0, {width:g}] x [0, {height:g}]")
     return (x, y)
+
+
+def _points(
+    value: object, loc: _Loc, point: Parser, min_len: int, max_len: int | None = None
+) -> tuple[tuple[float, float], ...]:
+    """A list of points inside the playfield (``point`` is :func:`_point` bound to its size)."""
+    items = _list(value, loc, min_len, max_len)
+    return tuple(point(p, loc.index(i)) for i, p in enumerate(items))
+
+
+def _check_lengths(segments: Iterable[tuple[float, ...]], loc: _Loc) -> None:
+    for i, (x0, y0, x1, y1) in enumerate(segments):
+        if x0 == x1 and y0 == y1:
+            loc.fail(f"segment {i} has zero length (both ends at ({x0:g}, {y0:g}))")
 
 
 def _record(
@@ -306,6 +431,7 @@ def _record(
 
 _positive = partial(_number, low=0.0, open_low=True)
 _non_negative = partial(_number, low=0.0)
+_score = partial(_number, low=0, integer=True)
 
 
 # --------------------------------------------------------------------------------------------
@@ -324,33 +450,33 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     point = partial(_point, width=width, height=height)
 
     materials = _materials(raw["materials"], top.key("materials"))
-    walls = tuple(
-        _wall(item, top.key("walls").index(i, _name_of(item)), point)
-        for i, item in enumerate(_list(raw.get("walls", []), top.key("walls")))
-    )
-    posts = tuple(
-        _record(
-            Post,
-            item,
-            top.key("posts").index(i, _name_of(item)),
-            {
-                "name": _string,
-                "center": point,
-                "radius": _positive,
-                "material": _string,
-                "kick": _non_negative,
-            },
-        )
-        for i, item in enumerate(_list(raw.get("posts", []), top.key("posts")))
-    )
-    _check_elements(walls, posts, materials, top)
+    walls = _group(raw, top, "walls", partial(_wall, point=point))
+    post_parsers = {
+        "name": _string,
+        "center": point,
+        "radius": _positive,
+        "material": _string,
+        "kick": _non_negative,
+        "score": _score,
+    }
+    posts = _group(raw, top, "posts", partial(_record, Post, parsers=post_parsers))
+    flippers = _group(raw, top, "flippers", partial(_flipper, point=point))
+    sensors = _group(raw, top, "sensors", partial(_sensor, point=point))
+    elements = {"walls": walls, "posts": posts, "flippers": flippers, "sensors": sensors}
+    _check_elements(elements, materials, top)
+    _check_pivots(flippers, walls, top)
 
     ball_loc = top.key("ball")
     ball_parsers = {"radius": _positive, "mass": _positive, "start": point, "velocity": _pair}
     ball = _record(Ball, raw["ball"], ball_loc, ball_parsers)
-    _check_ball_clear(ball, walls, posts, ball_loc.key("start"))
+    _check_clear(ball.start, ball.radius, walls, posts, flippers, ball_loc.key("start"))
 
     options: dict[str, Any] = {}
+    if "plunger" in raw:
+        options["plunger"] = plunger = _plunger(raw["plunger"], top.key("plunger"), point)
+        position_loc = top.key("plunger").key("position")
+        _check_clear(plunger.position, ball.radius, walls, posts, flippers, position_loc)
+        _check_launch_path(plunger, walls, top)
     if "slope_deg" in raw:
         options["slope_deg"] = _number(
             raw["slope_deg"], top.key("slope_deg"), 0.0, 90.0, open_high=True
@@ -376,6 +502,8 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
         materials=materials,
         walls=walls,
         posts=posts,
+        flippers=flippers,
+        sensors=sensors,
         source=source,
         **options,
     )
@@ -391,12 +519,21 @@ _TOP_KEYS = (
     "materials",
     "walls",
     "posts",
+    "flippers",
+    "sensors",
+    "plunger",
     "simulation",
 )
 
 
 def _name_of(item: object) -> object:
     return item.get("name") if isinstance(item, Mapping) else None
+
+
+def _group(raw: Mapping[str, Any], top: _Loc, key: str, parse: Parser) -> tuple[Any, ...]:
+    """The optional list ``raw[key]`` of elements, each parsed at its path ``key[i] 'name'``."""
+    items = _list(raw.get(key, []), top.key(key))
+    return tuple(parse(item, top.key(key).index(i, _name_of(item))) for i, item in enumerate(items))
 
 
 def _materials(value: object, loc: _Loc) -> tuple[Material, ...]:
@@ -413,68 +550,198 @@ def _materials(value: object, loc: _Loc) -> tuple[Material, ...]:
 
 
 def _wall(value: object, loc: _Loc, point: Parser) -> Wall:
-    def points(items: object, points_loc: _Loc) -> tuple[tuple[float, float], ...]:
-        items = _list(items, points_loc, min_len=2)
-        return tuple(point(p, points_loc.index(i)) for i, p in enumerate(items))
-
     wall = _record(
         Wall,
         value,
         loc,
         {
             "name": _string,
-            "points": points,
+            "points": partial(_points, point=point, min_len=2),
             "closed": _flag,
             "material": _string,
             "one_sided": _flag,
             "kick": _non_negative,
+            "score": _score,
         },
     )
     if wall.closed and len(wall.points) < 3:
         loc.fail(f"a closed polyline needs at least 3 points, got {len(wall.points)}")
-    for i, (x0, y0, x1, y1) in enumerate(wall.segments()):
-        if x0 == x1 and y0 == y1:
-            loc.fail(f"segment {i} has zero length (both ends at ({x0:g}, {y0:g}))")
+    _check_lengths(wall.segments(), loc)
     return wall
 
 
+def _flipper(value: object, loc: _Loc, point: Parser) -> Flipper:
+    angle = partial(_number, low=-360.0, high=360.0)
+    flipper = _record(
+        Flipper,
+        value,
+        loc,
+        {
+            "name": _string,
+            "pivot": point,
+            "length": _positive,
+            "base_radius": _positive,
+            "tip_radius": _positive,
+            "rest_angle": angle,
+            "up_angle": angle,
+            "stroke_time": partial(_number, low=0.005, high=0.2),
+            "return_time": partial(_number, low=0.005, high=0.5),
+            "material": _string,
+            "button": partial(_choice, options=_BUTTONS),
+            "score": _score,
+        },
+    )
+    swing = abs(flipper.up_angle - flipper.rest_angle)
+    if not 0.0 < swing <= 90.0:
+        loc.key("up_angle").fail(
+            f"flipper swing must be in (0, 90] degrees, got {swing:g} (|up_angle - rest_angle|)"
+        )
+    taper = abs(flipper.base_radius - flipper.tip_radius)
+    if taper >= flipper.length:
+        loc.fail(
+            f"|base_radius - tip_radius| = {taper:g} must be < length {flipper.length:g} "
+            "(else one end circle swallows the other)"
+        )
+    return flipper
+
+
+def _sensor(value: object, loc: _Loc, point: Parser) -> Sensor:
+    sensor = _record(
+        Sensor,
+        value,
+        loc,
+        {
+            "name": _string,
+            "points": partial(_points, point=point, min_len=2, max_len=2),
+            "drain": _flag,
+            "score": _score,
+        },
+    )
+    _check_lengths([sensor.segment], loc)
+    return sensor
+
+
+def _plunger(value: object, loc: _Loc, point: Parser) -> Plunger:
+    speed = partial(_pair, item=partial(_number, low=0.0, high=20.0, open_low=True))
+    plunger = _record(Plunger, value, loc, {"position": point, "speed": speed})
+    low, high = plunger.speed
+    if low > high:
+        loc.key("speed").fail(f"expected [min, max] with min <= max, got [{low:g}, {high:g}]")
+    return plunger
+
+
 def _check_elements(
-    walls: tuple[Wall, ...], posts: tuple[Post, ...], materials: tuple[Material, ...], top: _Loc
+    groups: Mapping[str, tuple[Any, ...]], materials: tuple[Material, ...], top: _Loc
 ) -> None:
-    """Element names are unique and every material reference resolves."""
+    """Element names are unique across all groups and every material reference resolves."""
     known = [m.name for m in materials]
     seen: dict[str, str] = {}
-    for group, elements in (("walls", walls), ("posts", posts)):
+    for group, elements in groups.items():
         for i, element in enumerate(elements):
             loc = top.key(group).index(i, element.name)
             if element.name in seen:
                 loc.fail(f"duplicate element name {element.name!r} (also {seen[element.name]})")
             seen[element.name] = loc.path
-            if element.material not in known:
+            material = getattr(element, "material", None)  # sensors have none
+            if material is not None and material not in known:
                 loc.key("material").fail(
-                    f"unknown material {element.material!r} (known: {', '.join(sorted(known))})"
+                    f"unknown material {material!r} (known: {', '.join(sorted(known))})"
                 )
 
 
-def _check_ball_clear(
-    ball: Ball, walls: tuple[Wall, ...], posts: tuple[Post, ...], loc: _Loc
-) -> None:
-    """The ball at its start position touches no wall segment and no post."""
+def _wall_segments(
+    walls: tuple[Wall, ...],
+) -> Iterable[tuple[Wall, int, tuple[float, float, float, float]]]:
+    """(wall, index of the segment in the wall, segment) for every segment of every wall."""
     for wall in walls:
         for i, segment in enumerate(wall.segments()):
-            distance = _segment_distance(ball.start, segment)
-            if distance < ball.radius:
-                loc.fail(
-                    f"ball overlaps wall {wall.name!r} segment {i} "
-                    f"(distance {distance:g} < ball radius {ball.radius:g})"
+            yield wall, i, segment
+
+
+def _check_pivots(flippers: tuple[Flipper, ...], walls: tuple[Wall, ...], top: _Loc) -> None:
+    """No flipper's base circle (around its pivot) overlaps a wall."""
+    for i, flipper in enumerate(flippers):
+        for wall, j, segment in _wall_segments(walls):
+            distance = _segment_distance(flipper.pivot, segment)
+            if distance < flipper.base_radius:
+                x, y = flipper.pivot
+                top.key("flippers").index(i, flipper.name).key("pivot").fail(
+                    f"pivot ({x:g}, {y:g}) overlaps wall {wall.name!r} segment {j} "
+                    f"(distance {distance:g} < base radius {flipper.base_radius:g})"
                 )
+
+
+def _check_clear(
+    center: tuple[float, float],
+    radius: float,
+    walls: tuple[Wall, ...],
+    posts: tuple[Post, ...],
+    flippers: tuple[Flipper, ...],
+    loc: _Loc,
+) -> None:
+    """A ball of ``radius`` at ``center`` touches no wall, no post and no flipper at rest."""
+    for wall, i, segment in _wall_segments(walls):
+        distance = _segment_distance(center, segment)
+        if distance < radius:
+            loc.fail(
+                f"ball overlaps wall {wall.name!r} segment {i} "
+                f"(distance {distance:g} < ball radius {radius:g})"
+            )
     for post in posts:
-        gap = math.dist(ball.start, post.center) - post.radius
-        if gap < ball.radius:
+        gap = math.dist(center, post.center) - post.radius
+        if gap < radius:
             loc.fail(
                 f"ball overlaps post {post.name!r} "
-                f"(distance to its surface {gap:g} < ball radius {ball.radius:g})"
+                f"(distance to its surface {gap:g} < ball radius {radius:g})"
             )
+    for flipper in flippers:
+        gap = _flipper_distance(center, flipper, flipper.rest_angle)
+        if gap < radius:
+            loc.fail(
+                f"ball overlaps flipper {flipper.name!r} at its rest angle "
+                f"(distance to its surface {gap:g} < ball radius {radius:g})"
+            )
+
+
+def _check_launch_path(plunger: Plunger, walls: tuple[Wall, ...], top: _Loc) -> None:
+    """One-sided segments across the launch path (straight up from the plunger) let it through.
+
+    A one-sided segment stops a ball coming from the side of its normal rot+90(P1 - P0) =
+    (y0 - y1, x1 - x0). A ball launched along +y meets it from that side when the normal's y
+    component x1 - x0 is negative.
+    """
+    px, py = plunger.position
+    for i, wall in enumerate(walls):
+        if not wall.one_sided:
+            continue
+        for j, (x0, y0, x1, y1) in enumerate(wall.segments()):
+            if x0 == x1 or not min(x0, x1) <= px <= max(x0, x1):
+                continue  # parallel to the path, or beside it
+            crossing_y = y0 + (px - x0) * (y1 - y0) / (x1 - x0)
+            if crossing_y > py and x1 < x0:
+                top.key("walls").index(i, wall.name).fail(
+                    f"one-sided segment {j} blocks the plunger's launch path "
+                    "(its normal faces the plunger; reverse its points)"
+                )
+
+
+def _flipper_distance(p: tuple[float, float], flipper: Flipper, angle_deg: float) -> float:
+    """Signed distance from ``p`` to the surface of ``flipper`` turned to ``angle_deg``."""
+    angle = math.radians(angle_deg)
+    dx, dy = p[0] - flipper.pivot[0], p[1] - flipper.pivot[1]
+    # Local frame: u along the flipper (pivot -> tip), v across it; the capsule is symmetric in v.
+    u = dx * math.cos(angle) + dy * math.sin(angle)
+    v = abs(-dx * math.sin(angle) + dy * math.cos(angle))
+    length, base, tip = flipper.length, flipper.base_radius, flipper.tip_radius
+    # (nx, ny): unit normal of the tangent line joining the two circles (|base - tip| < length).
+    nx = (base - tip) / length
+    ny = math.sqrt(1.0 - nx * nx)
+    s = u * ny - v * nx  # position along that tangent line
+    if s < 0.0:
+        return math.hypot(u, v) - base
+    if s > length * ny:
+        return math.hypot(u - length, v) - tip
+    return u * nx + v * ny - base
 
 
 def _segment_distance(p: tuple[float, float], segment: tuple[float, float, float, float]) -> float:

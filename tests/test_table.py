@@ -1,4 +1,4 @@
-"""Tests of the table loader: box.yaml, packing, and one case per validation rule."""
+"""Tests of the table loader: box.yaml, classic.yaml, packing, and one case per validation rule."""
 
 import copy
 import dataclasses
@@ -16,21 +16,42 @@ from pinball_env.physics import layout
 from pinball_env.table import (
     TABLES_DIR,
     Ball,
+    Flipper,
+    Plunger,
+    Post,
+    Sensor,
     Simulation,
     Table,
     TableError,
     Wall,
+    _flipper_distance,
     available_tables,
     load_table,
     table_from_dict,
 )
 
 BOX = TABLES_DIR / "box.yaml"
+CLASSIC = TABLES_DIR / "classic.yaml"
 
 
 def box_dict() -> dict[str, Any]:
     with BOX.open(encoding="utf-8") as f:
         return yaml.safe_load(f)
+
+
+def classic_dict() -> dict[str, Any]:
+    with CLASSIC.open(encoding="utf-8") as f:
+        return yaml.safe_load(f)
+
+
+def _check_arrays(packed: Any, expected: dict[str, tuple[tuple[int, ...], type]]) -> None:
+    """Every array named in ``expected`` has that shape and dtype, C order, read-only."""
+    for field, (shape, dtype) in expected.items():
+        array = getattr(packed, field)
+        assert array.shape == shape, field
+        assert array.dtype == dtype, field
+        assert array.flags.c_contiguous, field
+        assert not array.flags.writeable, field
 
 
 # --- box.yaml and packing ----------------------------------------------------------------------
@@ -67,13 +88,17 @@ def test_packed_arrays() -> None:
         "circles": ((n_circles, 3), np.float64),
         "circle_props": ((n_circles, layout.PROP_SIZE), np.float64),
         "gravity": ((2,), np.float64),
+        # box.yaml has no flippers and no sensors: empty arrays of the right shape
+        "flippers": ((0, layout.FLIPPER_SIZE), np.float64),
+        "flipper_props": ((0, layout.PROP_SIZE), np.float64),
+        "sensors": ((0, 4), np.float64),
+        "sensor_drain": ((0,), np.bool_),
+        "element_scores": ((n_segments + n_circles,), np.int64),
     }
-    for field, (shape, dtype) in expected.items():
-        array = getattr(packed, field)
-        assert array.shape == shape, field
-        assert array.dtype == dtype, field
-        assert array.flags.c_contiguous, field
-        assert not array.flags.writeable, field
+    _check_arrays(packed, expected)
+    assert packed.flipper_buttons == ()
+    assert not packed.element_scores.any()
+    assert table.plunger is None
     with pytest.raises(ValueError, match="read-only"):
         packed.segments[0, 0] = 1.0
     assert len(packed.element_names) == n_segments + n_circles
@@ -129,6 +154,9 @@ def test_empty_table_packs_to_empty_arrays() -> None:
     assert packed.circles.shape == (0, 3)
     assert packed.circle_props.shape == (0, layout.PROP_SIZE)
     assert packed.element_names == ()
+    assert packed.flippers.shape == (0, layout.FLIPPER_SIZE)
+    assert packed.sensors.shape == (0, 4)
+    assert packed.element_scores.shape == (0,)
 
 
 def test_defaults_come_from_the_dataclasses() -> None:
@@ -159,6 +187,180 @@ def test_table_is_frozen() -> None:
     table = load_table("box")
     with pytest.raises(dataclasses.FrozenInstanceError):
         table.name = "other"  # type: ignore[misc]
+
+
+# --- classic.yaml: flippers, sensors, plunger, scores ------------------------------------------
+
+
+def test_classic_loads() -> None:
+    table = load_table("classic")
+    assert table.name == "classic"
+    assert "classic" in available_tables()
+    assert table.ball.start == (0.4865, 0.04)
+    assert table.plunger == Plunger(position=(0.4865, 0.04), speed=(2.2, 3.2))
+    assert [f.name for f in table.flippers] == ["left_flipper", "right_flipper"]
+    assert table.flippers[0] == Flipper(
+        name="left_flipper",
+        pivot=(0.146, 0.12),
+        length=0.07,
+        base_radius=0.0116,
+        tip_radius=0.007,
+        rest_angle=-25.0,
+        up_angle=25.0,
+        stroke_time=0.022,
+        return_time=0.04,
+        material="flipper",
+        button="left",
+    )
+    assert [s.name for s in table.sensors if s.drain] == ["drain"]
+    assert table.sensors[0] == Sensor(
+        name="left_outlane", points=((0.005, 0.28), (0.04, 0.28)), score=10
+    )
+    assert [w.name for w in table.walls if w.one_sided] == ["gate"]
+    assert {w.name: w.score for w in table.walls if w.score} == {
+        "left_slingshot": 10,
+        "right_slingshot": 10,
+    }
+    assert [p.score for p in table.posts] == [100, 100, 100, 0, 0]
+    outline = table.walls[0]
+    assert outline.closed and len(outline.segments()) == 27  # 3 + 24 arch segments
+    # The arch ends on the semicircle's far end, left of its centre (0.255, 0.82).
+    assert outline.points[-1] == (0.005, 0.82)
+    # The right half mirrors the left about x = 0.2365.
+    by_name = {p.name: p for p in table.posts}
+    assert by_name["bumper_right"].center[0] == pytest.approx(
+        0.473 - by_name["bumper_left"].center[0]
+    )
+    assert table.flippers[1].pivot[0] == pytest.approx(0.473 - table.flippers[0].pivot[0])
+    assert table.flippers[1].rest_angle == 180.0 - table.flippers[0].rest_angle
+
+
+def test_flipper_speeds() -> None:
+    flipper = load_table("classic").flippers[0]
+    assert flipper.up_speed == pytest.approx(math.radians(50) / 0.022, rel=1e-15)
+    assert flipper.down_speed == pytest.approx(math.radians(50) / 0.04, rel=1e-15)
+
+
+def test_classic_packed_arrays() -> None:
+    table = load_table("classic")
+    packed = table.pack()
+    n_segments = sum(len(w.segments()) for w in table.walls)
+    n_elements = n_segments + 5 + 2 + 5  # segments, posts, flippers, sensors
+    _check_arrays(
+        packed,
+        {
+            "flippers": ((2, layout.FLIPPER_SIZE), np.float64),
+            "flipper_props": ((2, layout.PROP_SIZE), np.float64),
+            "sensors": ((5, 4), np.float64),
+            "sensor_drain": ((5,), np.bool_),
+            "element_scores": ((n_elements,), np.int64),
+        },
+    )
+    assert len(packed.element_names) == n_elements
+
+
+def test_packed_flippers() -> None:
+    packed = load_table("classic").pack()
+    up_speed = math.radians(50) / 0.022
+    down_speed = math.radians(50) / 0.04
+    expected = {
+        layout.FLIPPER_PIVOT_X: (0.146, 0.327),
+        layout.FLIPPER_PIVOT_Y: (0.12, 0.12),
+        layout.FLIPPER_LENGTH: (0.07, 0.07),
+        layout.FLIPPER_BASE_RADIUS: (0.0116, 0.0116),
+        layout.FLIPPER_TIP_RADIUS: (0.007, 0.007),
+        layout.FLIPPER_REST_ANGLE: (math.radians(-25), math.radians(205)),
+        layout.FLIPPER_UP_ANGLE: (math.radians(25), math.radians(155)),
+        layout.FLIPPER_UP_SPEED: (up_speed, up_speed),
+        layout.FLIPPER_DOWN_SPEED: (down_speed, down_speed),
+    }
+    assert sorted(expected) == list(range(layout.FLIPPER_SIZE))
+    for column, values in expected.items():
+        np.testing.assert_allclose(packed.flippers[:, column], values, rtol=1e-15)
+    assert packed.flipper_buttons == (0, 1)
+    np.testing.assert_array_equal(packed.flipper_props[:, layout.PROP_RESTITUTION], [0.8, 0.8])
+    np.testing.assert_array_equal(packed.flipper_props[:, layout.PROP_FRICTION], [0.4, 0.4])
+    np.testing.assert_array_equal(packed.flipper_props[:, layout.PROP_KICK], [0.0, 0.0])
+
+
+def test_packed_sensors() -> None:
+    packed = load_table("classic").pack()
+    np.testing.assert_array_equal(packed.sensors[-1], [0.005, 0.03, 0.468, 0.03])
+    assert packed.sensor_drain.tolist() == [False, False, False, False, True]
+
+
+def test_element_ids_and_scores() -> None:
+    table = load_table("classic")
+    packed = table.pack()
+    n_segments = sum(len(w.segments()) for w in table.walls)
+    names = packed.element_names
+    # Segments, then circles, flippers and sensors, each in file order.
+    assert names[0] == "outline[0]"
+    assert names[n_segments - 1] == "right_slingshot[0]"
+    assert names[n_segments:] == (
+        "bumper_left",
+        "bumper_right",
+        "bumper_bottom",
+        "left_guide_post",
+        "right_guide_post",
+        "left_flipper",
+        "right_flipper",
+        "left_outlane",
+        "left_inlane",
+        "right_inlane",
+        "right_outlane",
+        "drain",
+    )
+    scores = dict(zip(names, packed.element_scores.tolist(), strict=True))
+    assert {name: score for name, score in scores.items() if score} == {
+        "left_slingshot[0]": 10,
+        "right_slingshot[0]": 10,
+        "bumper_left": 100,
+        "bumper_right": 100,
+        "bumper_bottom": 100,
+        "left_outlane": 10,
+        "left_inlane": 10,
+        "right_inlane": 10,
+        "right_outlane": 10,
+    }
+
+
+def test_scores_default_to_zero_and_every_segment_of_a_wall_scores() -> None:
+    assert Wall(name="w", points=((0.0, 0.0), (1.0, 0.0)), material="m").score == 0
+    assert Post(name="p", center=(0.0, 0.0), radius=0.1, material="m").score == 0
+    data = box_dict()
+    data["walls"][0]["score"] = 5
+    packed = table_from_dict(data).pack()
+    assert packed.element_scores.tolist() == [5, 5, 5, 5, 0, 0, 0, 0, 0]
+
+
+def test_flipper_buttons_follow_the_file() -> None:
+    data = classic_dict()
+    data["flippers"][0]["button"] = "right"
+    assert table_from_dict(data).pack().flipper_buttons == (1, 1)
+
+
+def test_flipper_distance_matches_the_hull_of_its_circles() -> None:
+    """The tapered capsule is the union of discs with centre and radius interpolated base -> tip."""
+    flipper = load_table("classic").flippers[1]
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 1.0, 20001)
+    angle = math.radians(flipper.rest_angle)
+    cx = flipper.pivot[0] + t * flipper.length * math.cos(angle)
+    cy = flipper.pivot[1] + t * flipper.length * math.sin(angle)
+    radius = flipper.base_radius + t * (flipper.tip_radius - flipper.base_radius)
+    for x, y in rng.uniform((0.20, 0.04), (0.40, 0.20), size=(200, 2)):
+        brute = np.min(np.hypot(x - cx, y - cy) - radius)
+        if brute > 0.0:  # outside; inside, the union's depth is not the capsule's signed distance
+            assert _flipper_distance((x, y), flipper, flipper.rest_angle) == pytest.approx(
+                brute, abs=1e-7
+            )
+
+
+def test_plunger_is_optional() -> None:
+    data = classic_dict()
+    del data["plunger"]
+    assert table_from_dict(data).plunger is None
 
 
 # --- validation: one case per rule ---------------------------------------------------------------
@@ -333,16 +535,241 @@ BAD_TABLES: dict[str, tuple[Mutation, str, str]] = {
 }
 
 
+LEFT_FLIPPER = "flippers[0] 'left_flipper'"
+DRAIN = "sensors[4] 'drain'"
+BUMPER = "posts[0] 'bumper_left'"
+GATE = "walls[2] 'gate'"
+
+# The same, as mutations of classic.yaml's dict: flippers, sensors, plunger and scores.
+BAD_CLASSIC_TABLES: dict[str, tuple[Mutation, str, str]] = {
+    # unknown and missing keys
+    "unknown flipper key": (
+        _set("flippers", 0, "kick", value=1.0),
+        LEFT_FLIPPER,
+        "unknown key 'kick'",
+    ),
+    "unknown sensor key": (_set("sensors", 4, "material", value="wall"), DRAIN, "unknown key"),
+    "unknown plunger key": (_set("plunger", "force", value=1.0), "plunger", "unknown key 'force'"),
+    "missing flipper length": (
+        _drop("flippers", 0, "length"),
+        LEFT_FLIPPER,
+        "missing required key 'length'",
+    ),
+    "missing flipper button": (_drop("flippers", 0, "button"), LEFT_FLIPPER, "key 'button'"),
+    "missing sensor points": (_drop("sensors", 4, "points"), DRAIN, "missing required key"),
+    "missing plunger speed": (_drop("plunger", "speed"), "plunger", "missing required key 'speed'"),
+    "flipper not a mapping": (_set("flippers", 1, value="right"), "flippers[1]", "mapping"),
+    "flippers not a list": (_set("flippers", value={}), "flippers", "expected a list"),
+    "sensors not a list": (_set("sensors", value="drain"), "sensors", "expected a list"),
+    "plunger not a mapping": (_set("plunger", value=[0.48, 0.04]), "plunger", "mapping"),
+    # wrong types and non-finite numbers
+    "flipper length nan": (
+        _set("flippers", 0, "length", value=float("nan")),
+        f"{LEFT_FLIPPER}.length",
+        "finite",
+    ),
+    "rest angle string": (
+        _set("flippers", 0, "rest_angle", value="-25deg"),
+        f"{LEFT_FLIPPER}.rest_angle",
+        "expected a number, got str",
+    ),
+    "button unknown": (
+        _set("flippers", 0, "button", value="middle"),
+        f"{LEFT_FLIPPER}.button",
+        "expected one of 'left', 'right', got str 'middle'",
+    ),
+    "button not a string": (
+        _set("flippers", 0, "button", value=0),
+        f"{LEFT_FLIPPER}.button",
+        "int",
+    ),
+    "drain not a bool": (_set("sensors", 4, "drain", value="yes"), f"{DRAIN}.drain", "true"),
+    "speed not a pair": (_set("plunger", "speed", value=3.0), "plunger.speed", "expected a pair"),
+    # scores
+    "negative wall score": (
+        _set("walls", 6, "score", value=-10),
+        "walls[6] 'left_slingshot'.score",
+        "out of range (must be >= 0)",
+    ),
+    "float post score": (
+        _set("posts", 0, "score", value=100.5),
+        f"{BUMPER}.score",
+        "expected an integer",
+    ),
+    "string flipper score": (
+        _set("flippers", 0, "score", value="10"),
+        f"{LEFT_FLIPPER}.score",
+        "expected an integer",
+    ),
+    "negative sensor score": (_set("sensors", 4, "score", value=-1), f"{DRAIN}.score", "range"),
+    # out-of-range flipper fields
+    "flipper length zero": (
+        _set("flippers", 0, "length", value=0.0),
+        f"{LEFT_FLIPPER}.length",
+        "out of range (must be > 0)",
+    ),
+    "base radius negative": (
+        _set("flippers", 0, "base_radius", value=-0.01),
+        f"{LEFT_FLIPPER}.base_radius",
+        "out of range",
+    ),
+    "tip radius zero": (
+        _set("flippers", 0, "tip_radius", value=0),
+        f"{LEFT_FLIPPER}.tip_radius",
+        "out of range",
+    ),
+    "rest angle beyond a turn": (
+        _set("flippers", 0, "rest_angle", value=400),
+        f"{LEFT_FLIPPER}.rest_angle",
+        "out of range (must be [-360, 360])",
+    ),
+    "stroke too short": (
+        _set("flippers", 0, "stroke_time", value=0.001),
+        f"{LEFT_FLIPPER}.stroke_time",
+        "out of range (must be [0.005, 0.2])",
+    ),
+    "return too long": (
+        _set("flippers", 0, "return_time", value=1.0),
+        f"{LEFT_FLIPPER}.return_time",
+        "out of range (must be [0.005, 0.5])",
+    ),
+    "no swing": (
+        _set("flippers", 0, "up_angle", value=-25),
+        f"{LEFT_FLIPPER}.up_angle",
+        "flipper swing must be in (0, 90] degrees, got 0",
+    ),
+    "swing too wide": (
+        _set("flippers", 1, "up_angle", value=110),
+        "flippers[1] 'right_flipper'.up_angle",
+        "flipper swing must be in (0, 90] degrees, got 95",
+    ),
+    "base swallows tip": (
+        _set("flippers", 0, "base_radius", value=0.08),
+        LEFT_FLIPPER,
+        "|base_radius - tip_radius| = 0.073 must be < length 0.07",
+    ),
+    "tip swallows base": (
+        _set("flippers", 0, "tip_radius", value=0.09),
+        LEFT_FLIPPER,
+        "must be < length",
+    ),
+    # geometry: points, pivots, overlaps
+    "pivot outside": (
+        _set("flippers", 0, "pivot", value=[0.146, -0.01]),
+        f"{LEFT_FLIPPER}.pivot",
+        "outside the playfield",
+    ),
+    "pivot in a wall": (
+        _set("flippers", 0, "pivot", value=[0.146, 0.012]),
+        f"{LEFT_FLIPPER}.pivot",
+        "pivot (0.146, 0.012) overlaps wall 'outline' segment 0 (distance 0.007 < base radius",
+    ),
+    "pivot on a guide": (
+        _set("flippers", 1, "pivot", value=[0.338, 0.15]),
+        "flippers[1] 'right_flipper'.pivot",
+        "overlaps wall 'right_outlane_guide' segment 1",
+    ),
+    "sensor with 3 points": (
+        _set("sensors", 0, "points", value=[[0.005, 0.28], [0.02, 0.28], [0.04, 0.28]]),
+        "sensors[0] 'left_outlane'.points",
+        "expected exactly 2 items, got 3",
+    ),
+    "sensor with 1 point": (
+        _set("sensors", 0, "points", value=[[0.005, 0.28]]),
+        "sensors[0] 'left_outlane'.points",
+        "expected exactly 2 items, got 1",
+    ),
+    "sensor of zero length": (
+        _set("sensors", 4, "points", value=[[0.2, 0.03], [0.2, 0.03]]),
+        DRAIN,
+        "zero length",
+    ),
+    "sensor point outside": (
+        _set("sensors", 4, "points", 1, value=[0.6, 0.03]),
+        f"{DRAIN}.points[1]",
+        "outside the playfield",
+    ),
+    "ball on a flipper": (
+        _set("ball", "start", value=[0.18, 0.12]),
+        "ball.start",
+        "ball overlaps flipper 'left_flipper' at its rest angle",
+    ),
+    "plunger outside": (
+        _set("plunger", "position", value=[0.52, 0.04]),
+        "plunger.position",
+        "outside the playfield",
+    ),
+    "plunger on a flipper": (
+        _set("plunger", "position", value=[0.18, 0.12]),
+        "plunger.position",
+        "ball overlaps flipper 'left_flipper' at its rest angle (distance to its surface",
+    ),
+    "plunger on a wall": (
+        _set("plunger", "position", value=[0.475, 0.04]),
+        "plunger.position",
+        "ball overlaps wall 'lane_wall' segment 0",
+    ),
+    "plunger on a post": (
+        _set("plunger", "position", value=[0.2365, 0.6]),
+        "plunger.position",
+        "ball overlaps post 'bumper_bottom'",
+    ),
+    # plunger speeds
+    "speed zero": (
+        _set("plunger", "speed", value=[0.0, 3.2]),
+        "plunger.speed[0]",
+        "out of range (must be (0, 20])",
+    ),
+    "speed too high": (_set("plunger", "speed", value=[2.2, 25]), "plunger.speed[1]", "range"),
+    "speed reversed": (
+        _set("plunger", "speed", value=[3.2, 2.2]),
+        "plunger.speed",
+        "expected [min, max] with min <= max, got [3.2, 2.2]",
+    ),
+    # gate orientation
+    "gate reversed": (
+        _set("walls", 2, "points", value=[[0.505, 0.84], [0.468, 0.80]]),
+        GATE,
+        "one-sided segment 0 blocks the plunger's launch path "
+        "(its normal faces the plunger; reverse its points)",
+    ),
+    # references and names across the new groups
+    "unknown flipper material": (
+        _set("flippers", 0, "material", value="steel"),
+        f"{LEFT_FLIPPER}.material",
+        "unknown material 'steel' (known: bumper, flipper, metal, rubber, wall)",
+    ),
+    "duplicate flipper and wall": (
+        _set("flippers", 0, "name", value="gate"),
+        "flippers[0] 'gate'",
+        "duplicate element name 'gate' (also walls[2] 'gate')",
+    ),
+    "duplicate sensor and flipper": (
+        _set("sensors", 4, "name", value="right_flipper"),
+        "sensors[4] 'right_flipper'",
+        "duplicate element name 'right_flipper' (also flippers[1]",
+    ),
+}
+
+INVALID_CASES = [("box", case) for case in BAD_TABLES] + [
+    ("classic", case) for case in BAD_CLASSIC_TABLES
+]
+
+
 def _write(tmp_path: Path, data: Any) -> Path:
     path = tmp_path / "bad.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
     return path
 
 
-@pytest.mark.parametrize("case", BAD_TABLES, ids=list(BAD_TABLES))
-def test_invalid_table(tmp_path: Path, case: str) -> None:
-    mutate, where, problem = BAD_TABLES[case]
-    data = copy.deepcopy(box_dict())
+@pytest.mark.parametrize(
+    ("base", "case"),
+    INVALID_CASES,
+    ids=[case if base == "box" else f"classic: {case}" for base, case in INVALID_CASES],
+)
+def test_invalid_table(tmp_path: Path, base: str, case: str) -> None:
+    mutate, where, problem = (BAD_TABLES if base == "box" else BAD_CLASSIC_TABLES)[case]
+    data = copy.deepcopy(box_dict() if base == "box" else classic_dict())
     mutate(data)
     path = _write(tmp_path, data)
     pattern = re.escape(f"bad.yaml: {where}") + ".*" + re.escape(problem)
@@ -353,6 +780,26 @@ def test_invalid_table(tmp_path: Path, case: str) -> None:
 def test_box_round_trips_through_the_writer(tmp_path: Path) -> None:
     """The writer used above yields a valid file when nothing is mutated."""
     assert load_table(_write(tmp_path, box_dict())).walls == load_table("box").walls
+
+
+def test_classic_round_trips_through_the_writer(tmp_path: Path) -> None:
+    written = load_table(_write(tmp_path, classic_dict()))
+    assert dataclasses.replace(written, source="") == dataclasses.replace(
+        load_table("classic"), source=""
+    )
+
+
+def test_gate_facing_the_launch_only_matters_across_the_path() -> None:
+    """A reversed one-sided segment beside the launch path, or no plunger at all, is accepted."""
+    data = classic_dict()
+    data["walls"][2]["points"].reverse()
+    del data["plunger"]
+    table_from_dict(data)  # no plunger: no launch path to check
+    data = classic_dict()
+    data["walls"].append(
+        {"name": "trap", "points": [[0.3, 0.5], [0.2, 0.5]], "material": "metal", "one_sided": True}
+    )
+    table_from_dict(data)  # blocks balls coming up the table, but not the plunger's path
 
 
 def test_yaml_syntax_error(tmp_path: Path) -> None:

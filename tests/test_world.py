@@ -81,7 +81,7 @@ def test_free_fall_matches_semi_implicit_euler_exactly():
     assert state[BALL_Y] == pytest.approx(expected_y, abs=1e-12)
     assert state[BALL_X] == pytest.approx(0.25 + 0.3 * n * h, abs=1e-12)
     assert state[BALL_VY] == pytest.approx(0.5 - g_table() * n * h, abs=1e-12)
-    assert world.contact_count[0] == 0
+    assert world.state.contact_count[0] == 0
 
 
 def test_wall_bounce_restitution_and_contact_time():
@@ -116,7 +116,7 @@ def test_ball_comes_to_rest_on_the_floor_without_jitter_or_sinking():
     heights = world.trace(300)[:, 1]
     np.testing.assert_allclose(heights, rest_y, rtol=0, atol=1e-12)
     assert abs(ball(world)[BALL_VY]) < 1e-12
-    assert world.contact_count[0] >= 1  # resting contact every substep, each one inelastic
+    assert world.state.contact_count[0] >= 1  # resting contact every substep, each one inelastic
 
 
 def test_sliding_ball_ends_rolling_at_five_sevenths_of_its_speed():
@@ -200,7 +200,7 @@ def test_inactive_ball_is_left_untouched():
     before = ball(world, 1)
     world.trace(10)
     np.testing.assert_array_equal(ball(world, 1), before)
-    assert world.contact_count[1] == 0
+    assert world.state.contact_count[1] == 0
 
 
 def test_contact_log_overflow_counts_but_does_not_overrun():
@@ -212,7 +212,7 @@ def test_contact_log_overflow_counts_but_does_not_overrun():
     )  # fmt: skip
     world.place_ball(0, (0.1 + RADIUS + 0.0005, 0.5), (60.0, 0.0))
     world.step()
-    assert world.contact_count[0] > CONTACT_CAPACITY
+    assert world.state.contact_count[0] > CONTACT_CAPACITY
     assert len(world.frame_contacts()) == CONTACT_CAPACITY
 
 
@@ -304,7 +304,7 @@ def test_elastic_frictionless_bounces_conserve_energy():
     bounces = 0
     while bounces < 100_000:
         world.step()
-        bounces += int(world.contact_count[0])
+        bounces += int(world.state.contact_count[0])
     state = ball(world)
     energy = state[BALL_VX] ** 2 + state[BALL_VY] ** 2
     assert abs(energy - energy0) / energy0 < 1e-9
@@ -319,7 +319,7 @@ def test_same_input_gives_bitwise_same_output():
         contacts = []
         for _ in range(200):
             world.step()
-            contacts.append(world.contacts.copy())
+            contacts.append(world.state.contacts.copy())
         return world.balls.copy(), np.array(contacts)
 
     (balls_a, contacts_a), (balls_b, contacts_b) = run(), run()

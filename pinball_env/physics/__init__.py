@@ -4,6 +4,7 @@ Nothing here imports from Gymnasium, YAML or rendering code; everything works on
 arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1``.
 """
 
+from pinball_env.physics.flipper import capsule_distance, sweep_capsule, sweep_flipper
 from pinball_env.physics.sweep import (
     sweep_circle,
     sweep_circle_circle,
@@ -11,15 +12,20 @@ from pinball_env.physics.sweep import (
     sweep_point,
     sweep_segment,
 )
-from pinball_env.physics.world import earliest_contact, respond, step_balls
+from pinball_env.physics.world import Geometry, Settings, State, respond, step_world
 
 __all__ = [
-    "earliest_contact",
+    "Geometry",
+    "Settings",
+    "State",
+    "capsule_distance",
     "respond",
-    "step_balls",
+    "step_world",
+    "sweep_capsule",
     "sweep_circle",
     "sweep_circle_circle",
     "sweep_circle_segment",
+    "sweep_flipper",
     "sweep_point",
     "sweep_segment",
 ]

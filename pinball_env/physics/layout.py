@@ -20,9 +20,25 @@ PROP_SIZE = 3
 
 # Segment geometry, array of shape (n_segments, 4): x0, y0, x1, y1 [m].
 # Circle geometry, array of shape (n_circles, 3): x, y, radius [m].
+# Sensor geometry (rollovers, drain), array of shape (n_sensors, 4): x0, y0, x1, y1 [m]. The
+# ball passes over sensors; a crossing of its centre is an event. Drains take the ball out of play.
+
+# Flippers, array of shape (n_flippers, FLIPPER_SIZE), float64. A flipper is a tapered capsule: a
+# base circle around the pivot and a tip circle ``length`` away along the flipper's angle, joined
+# by their common tangents. Angles are counter-clockwise from +x [rad].
+FLIPPER_PIVOT_X = 0  # [m]
+FLIPPER_PIVOT_Y = 1  # [m]
+FLIPPER_LENGTH = 2  # pivot to tip-circle centre [m]
+FLIPPER_BASE_RADIUS = 3  # [m]
+FLIPPER_TIP_RADIUS = 4  # [m]
+FLIPPER_REST_ANGLE = 5  # angle when released, against the lower stop [rad]
+FLIPPER_UP_ANGLE = 6  # angle when energised, against the upper stop [rad]
+FLIPPER_UP_SPEED = 7  # angular speed of the upstroke [rad/s] (> 0)
+FLIPPER_DOWN_SPEED = 8  # angular speed of the return [rad/s] (> 0)
+FLIPPER_SIZE = 9
 
 # Contact log, one row per contact, array of shape (n_envs, capacity, CONTACT_SIZE).
-# Element ids are global: segments first, then circles (then flippers, when they exist).
+# Element ids are global: segments first, then circles, flippers and sensors.
 CONTACT_ELEMENT = 0  # global element id (stored as float, exact for any realistic count)
 CONTACT_TIME = 1  # time of the contact since the start of the step [s]
 CONTACT_SPEED = 2  # normal approach speed relative to the surface before the response [m/s]
