@@ -14,12 +14,33 @@ from pathlib import Path
 
 import numpy as np
 
-from pinball_env.table import Table, load_table
+from pinball_env.table import Flipper, Table, load_table
 from pinball_env.world import World
 
 WALL_COLOUR = "#1d3557"
 ONE_SIDED_COLOUR = "#e76f51"
+KICKER_COLOUR = "#e63946"
 POST_COLOUR = "#2a9d8f"
+FLIPPER_COLOUR = "#f4a261"
+SENSOR_COLOUR = "#8d99ae"
+
+
+def flipper_outline(flipper: Flipper, angle_deg: float, arc_points: int = 12) -> np.ndarray:
+    """Outline of a flipper at ``angle_deg`` as a closed polygon, (n, 2) world points."""
+    rb, rt, length = flipper.base_radius, flipper.tip_radius, flipper.length
+    # The tangent faces' outward normals make angle +-phi with the flipper axis.
+    phi = math.acos((rb - rt) / length)
+    tip = np.linspace(-phi, phi, arc_points)  # tip arc, around the front
+    base = np.linspace(phi, 2 * math.pi - phi, arc_points)  # base arc, around the back
+    local = np.vstack(
+        [
+            np.column_stack([length + rt * np.cos(tip), rt * np.sin(tip)]),
+            np.column_stack([rb * np.cos(base), rb * np.sin(base)]),
+        ]
+    )
+    a = math.radians(angle_deg)
+    rotation = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    return local @ rotation.T + np.asarray(flipper.pivot)
 
 
 def _pyplot():
@@ -34,11 +55,16 @@ def _pyplot():
 
 
 def draw_table(ax, table: Table) -> None:
-    """Draw walls (one-sided ones with an arrow on their blocking side), posts and the start."""
-    from matplotlib.patches import Circle
+    """Draw walls (one-sided ones with an arrow on their blocking side, kickers in red), posts,
+    flippers (at rest, and faintly raised), sensors (dashed) and the ball start."""
+    from matplotlib.patches import Circle, Polygon
 
     for wall in table.walls:
-        colour = ONE_SIDED_COLOUR if wall.one_sided else WALL_COLOUR
+        colour = WALL_COLOUR
+        if wall.one_sided:
+            colour = ONE_SIDED_COLOUR
+        elif wall.kick > 0:
+            colour = KICKER_COLOUR
         for x0, y0, x1, y1 in wall.segments():
             ax.plot([x0, x1], [y0, y1], color=colour, lw=2, solid_capstyle="round")
             if wall.one_sided:
@@ -52,7 +78,15 @@ def draw_table(ax, table: Table) -> None:
                     arrowprops={"arrowstyle": "->", "color": colour},
                 )  # fmt: skip
     for post in table.posts:
-        ax.add_patch(Circle(post.center, post.radius, color=POST_COLOUR, alpha=0.85))
+        colour = KICKER_COLOUR if post.kick > 0 else POST_COLOUR
+        ax.add_patch(Circle(post.center, post.radius, color=colour, alpha=0.85))
+    for flipper in table.flippers:
+        raised = flipper_outline(flipper, flipper.up_angle)
+        ax.add_patch(Polygon(raised, color=FLIPPER_COLOUR, alpha=0.3, lw=0))
+        ax.add_patch(Polygon(flipper_outline(flipper, flipper.rest_angle), color=FLIPPER_COLOUR))
+    for sensor in table.sensors:
+        (x0, y0), (x1, y1) = sensor.points
+        ax.plot([x0, x1], [y0, y1], color=SENSOR_COLOUR, lw=1.5, ls="--")
     ax.add_patch(Circle(table.ball.start, table.ball.radius, fill=False, ls="--", color="grey"))
     ax.set_xlim(0, table.width)
     ax.set_ylim(0, table.height)

@@ -587,8 +587,8 @@ BAD_CLASSIC_TABLES: dict[str, tuple[Mutation, str, str]] = {
     "speed not a pair": (_set("plunger", "speed", value=3.0), "plunger.speed", "expected a pair"),
     # scores
     "negative wall score": (
-        _set("walls", 6, "score", value=-10),
-        "walls[6] 'left_slingshot'.score",
+        _set("walls", 8, "score", value=-10),
+        "walls[8] 'left_slingshot'.score",
         "out of range (must be >= 0)",
     ),
     "float post score": (

@@ -132,14 +132,15 @@ def sweep_flipper(cx, cy, vx, vy, duration, r, px, py, length, rb, rt, angle0, o
         angle_b = angle0 + omega * min(tau_b, t_stop)
         ua, va = to_flipper_frame(cx + vx * tau_a, cy + vy * tau_a, px, py, angle_a)
         ub, vb = to_flipper_frame(cx + vx * tau_b, cy + vy * tau_b, px, py, angle_b)
-        t, nu, nv = sweep_capsule(ua, va, ub - ua, vb - va, r + chord_error, length, rb, rt)
+        t, _, _ = sweep_capsule(ua, va, ub - ua, vb - va, r + chord_error, length, rb, rt)
         if t < INF:
             tau = tau_a + t * (tau_b - tau_a)
+            # The normal from the closest point of the true pose (the chord's is off by up to
+            # chord_error / r in angle).
             angle = angle0 + omega * min(tau, t_stop)
-            c = math.cos(angle)
-            s = math.sin(angle)
-            nx = c * nu - s * nv
-            ny = s * nu + c * nv
+            _, nx, ny = flipper_distance(
+                cx + vx * tau, cy + vy * tau, px, py, length, rb, rt, angle
+            )
             w = omega if (moving and tau < t_stop) else 0.0
             # Surface velocity w x (contact - pivot), the contact point being r below the ball.
             qx = cx + vx * tau - r * nx - px
