@@ -21,6 +21,7 @@ from pinball_env.physics.layout import (
     CONTACT_TIME,
     FLIPPER_REST_ANGLE,
 )
+from pinball_env.physics.world import segment_bounds
 from pinball_env.table import Table
 
 # Contacts logged per env and frame; more are counted but not logged. A frame of a ball
@@ -57,6 +58,7 @@ class World:
         self.n_envs = n_envs
         self.geometry = Geometry(
             segments=packed.segments,
+            segment_bounds=segment_bounds(packed.segments),
             segment_props=packed.segment_props,
             segment_one_sided=packed.segment_one_sided,
             circles=packed.circles,

@@ -20,6 +20,7 @@ playfield normal is part of its state; kicking elements (bumpers, slingshots) th
 along the normal. After a contact the ball is put ``skin`` off the surface.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -65,6 +66,7 @@ class Geometry(NamedTuple):
     """The static table as arrays (see ``layout`` for the columns)."""
 
     segments: np.ndarray  # (S, 4)
+    segment_bounds: np.ndarray  # (S, 3): bounding circles, from segment_bounds(segments)
     segment_props: np.ndarray  # (S, PROP_SIZE)
     segment_one_sided: np.ndarray  # (S,) bool
     circles: np.ndarray  # (C, 3)
@@ -133,18 +135,35 @@ def respond(vx, vy, spin, nx, ny, svx, svy, r, restitution, friction, kick, rest
     return vx, vy, spin, -vn
 
 
+def segment_bounds(segments: np.ndarray) -> np.ndarray:
+    """Bounding circle of every segment, (S, 3): centre x, y and radius (half the length)."""
+    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    bounds = np.empty((segments.shape[0], 3))
+    bounds[:, 0] = 0.5 * (segments[:, 0] + segments[:, 2])
+    bounds[:, 1] = 0.5 * (segments[:, 1] + segments[:, 3])
+    bounds[:, 2] = 0.5 * np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    return bounds
+
+
 @njit(cache=True)
-def earliest_static_contact(x, y, dx, dy, r, segments, segment_one_sided, circles):
+def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_one_sided, circles):
     """Earliest contact of a ball sweeping from (x, y) by (dx, dy) with the walls and posts.
 
     Returns ``(t, nx, ny, element)``; ``element = -1`` (and ``t = inf``) when the path is free.
-    Element ids: segments first, then circles. On equal times the lowest id wins.
+    Element ids: segments first, then circles. On equal times the lowest id wins. A segment
+    whose bounding circle is out of the sweep's reach is skipped without the full test.
     """
     best_t = INF
     best_nx = 0.0
     best_ny = 0.0
     best = -1
+    travel = math.sqrt(dx * dx + dy * dy)
     for j in range(segments.shape[0]):
+        mx = x - segment_bounds[j, 0]
+        my = y - segment_bounds[j, 1]
+        reach = r + travel + segment_bounds[j, 2]
+        if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
+            continue  # cannot touch: the margin covers rounding in this test
         t, nx, ny = sweep_segment(
             x, y, dx, dy, r,
             segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3],
@@ -282,6 +301,7 @@ def step_world(geometry, settings, state):
     r = settings.radius
     tol = FLIPPER_TOLERANCE * settings.skin
     segments = geometry.segments  # unpacked once: the hot loop then sees plain arrays
+    bounds = geometry.segment_bounds
     segment_one_sided = geometry.segment_one_sided
     circles = geometry.circles
     n_segments = segments.shape[0]
@@ -322,7 +342,7 @@ def step_world(geometry, settings, state):
                         pass_stops[j] = max(stops[j] - elapsed, 0.0)
                     t, nx, ny, element = earliest_static_contact(
                         x, y, vx * remaining, vy * remaining, r,
-                        segments, segment_one_sided, circles,
+                        segments, bounds, segment_one_sided, circles,
                     )  # fmt: skip
                     svx = svy = 0.0
                     if n_flippers > 0:
