@@ -703,6 +703,21 @@ def _check_clear(
             )
 
 
+def check_ball_state(
+    table: Table, position: object, velocity: object, source: str
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Validate a ball state given at run time (e.g. reset options): ``position`` a finite [x, y]
+    in the playfield, clear of every wall, post and resting flipper; ``velocity`` a finite pair.
+    Errors name ``source``, e.g. ``reset options: ball_position: ...``."""
+    where = _Loc(source)
+    point = _point(position, where.key("ball_position"), table.width, table.height)
+    _check_clear(
+        point, table.ball.radius, table.walls, table.posts, table.flippers,
+        where.key("ball_position"),
+    )  # fmt: skip
+    return point, _pair(velocity, where.key("ball_velocity"))
+
+
 def _check_launch_path(plunger: Plunger, walls: tuple[Wall, ...], top: _Loc) -> None:
     """One-sided segments across the launch path (straight up from the plunger) let it through.
 

@@ -30,7 +30,8 @@ def test_kernel_tests_pass_without_jit():
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
     result = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not slow",
-         "tests/test_sweep.py", "tests/test_world.py"],
+         "tests/test_sweep.py", "tests/test_world.py", "tests/test_flipper.py",
+         "tests/test_classic.py"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=600,
     )  # fmt: skip
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]

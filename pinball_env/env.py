@@ -1,0 +1,271 @@
+"""``PinballEnv``: the Gymnasium shell around the game rules and the swept-collision physics."""
+
+import math
+import os
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from pinball_env.game import DISCRETE_BUTTONS, Game
+from pinball_env.render import Renderer, Window, render_size
+from pinball_env.table import Table, check_ball_state, load_table
+
+OBS_TYPES = ("state", "rgb", "grayscale")
+ACTION_TYPES = ("discrete", "multibinary")
+RESET_OPTIONS = ("ball_position", "ball_velocity")
+
+
+class PinballEnv(gym.Env):
+    """A real flipper-and-ball pinball table; the agent works the two flipper buttons.
+
+    ## Description
+
+    A 27 mm steel ball on a 0.51 m x 1.07 m playfield inclined at 6.5 degrees (the default
+    ``classic`` table: top arch, shooter lane and gate, three pop bumpers, two slingshots, in- and
+    outlanes, two flippers, a drain). The ball moves by swept (continuous) collision in fixed
+    substeps, so it never passes through a wall or a flipper; flippers swing up in 22 ms while
+    their button is held and fall back in 40 ms when it is released. Balls are put into play from
+    the plunger at a random speed; a game is ``balls`` balls.
+
+    ## Action Space
+
+    ``action_type="discrete"`` (default): ``Discrete(4)``
+
+    | Num | Action                  |
+    |-----|-------------------------|
+    | 0   | no button               |
+    | 1   | left flipper button     |
+    | 2   | right flipper button    |
+    | 3   | both buttons            |
+
+    ``action_type="multibinary"``: ``MultiBinary(2)``, (left button, right button).
+    A button acts for the whole step (one frame, 1/60 s): held, the flipper swings up to its stop
+    and stays there; released, it falls back to rest.
+
+    ## Observation Space
+
+    ``obs_type="state"`` (default): a ``Box`` of float32, table coordinates (x to the right,
+    y up the table, origin at the bottom-left corner), for a table with two flippers:
+
+    | Index | Observation                                   | Min   | Max   | Unit  |
+    |-------|-----------------------------------------------|-------|-------|-------|
+    | 0     | ball x                                        | 0     | 0.51  | m     |
+    | 1     | ball y                                        | 0     | 1.07  | m     |
+    | 2     | ball vx (clipped to +-20)                     | -20   | 20    | m/s   |
+    | 3     | ball vy (clipped to +-20)                     | -20   | 20    | m/s   |
+    | 4     | left flipper angle above rest                 | 0     | 0.873 | rad   |
+    | 5     | right flipper angle above rest                | 0     | 0.873 | rad   |
+    | 6     | left flipper angular velocity, + going up     | -39.7 | 39.7  | rad/s |
+    | 7     | right flipper angular velocity, + going up    | -39.7 | 39.7  | rad/s |
+    | 8     | ball in play (1) or game over (0)             | 0     | 1     | -     |
+    | 9     | balls left, the one in play included          | 0     | balls | -     |
+
+    The bounds come from the table (playfield size, flipper swing and speeds): for another table
+    the flipper rows repeat once per flipper in the table's order. A drained ball is replaced at
+    once by the next one on the plunger; after the last one the ball stays where it crossed the
+    drain.
+
+    ``obs_type="rgb"``: a ``Box(0, 255, (84, 84, 3), uint8)`` picture of the whole table (stretched
+    to the image), drawn without a display; ``obs_type="grayscale"``: the same as
+    ``(84, 84, 1)`` luminance. ``image_size`` changes the size.
+
+    ## Rewards
+
+    The points of the step's scoring events times ``reward_scale`` (default 0.01): a pop bumper
+    is 100 points (reward 1), a slingshot or a rollover 10 (0.1). Optional shaping, off by
+    default: ``height_shaping`` times the rise of the ball during the step in table heights (a
+    potential, so it sums to ``height_shaping`` times the net rise of each ball).
+
+    ## Starting State
+
+    Flippers at rest, score 0, ``balls`` balls to play; the first ball is fired up the shooter
+    lane at a speed drawn uniformly from the table's plunger range (2.2-3.2 m/s on ``classic``).
+    ``reset(options={"ball_position": [x, y], "ball_velocity": [vx, vy]})`` (metres, metres per
+    second; either key alone is allowed) puts the ball in play at that state instead, for tests
+    and curricula.
+
+    ## Episode End
+
+    Termination: the last ball drains (the game is over). Truncation: only by the ``TimeLimit``
+    wrapper, ``max_episode_steps=7200`` (two minutes of play) for ``Pinball-v0``.
+
+    ``info`` (reset and step): ``ball_position``, ``ball_velocity`` (float64 arrays, m and m/s),
+    ``score`` (points this game), ``balls_left``, ``events`` (scoring element name -> hits this
+    step), ``points`` (this step) and ``drained`` (a ball drained this step).
+
+    ## Arguments
+
+    ```python
+    gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
+             reward_scale=0.01, height_shaping=0.0, image_size=(84, 84), render_mode=None)
+    ```
+
+    - ``table``: a table name from ``configs/tables`` or a path to a table YAML file.
+    - ``obs_type``: ``"state"``, ``"rgb"`` or ``"grayscale"``.
+    - ``action_type``: ``"discrete"`` or ``"multibinary"``.
+    - ``balls``: balls per game (>= 1).
+    - ``reward_scale``: reward per point.
+    - ``height_shaping``: weight of the optional height shaping term (0 = off).
+    - ``image_size``: (height, width) of image observations, in pixels.
+    - ``render_mode``: ``"human"`` (a pygame window at ``render_fps``, needs the ``render``
+      extra) or ``"rgb_array"`` (an aspect-correct uint8 HxWx3 frame, no display needed).
+
+    ## Version History
+
+    - v0: first release: swept collision against walls, posts and rotating flippers.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 60}
+
+    def __init__(
+        self,
+        table: str | os.PathLike[str] | Table = "classic",
+        obs_type: str = "state",
+        action_type: str = "discrete",
+        balls: int = 3,
+        reward_scale: float = 0.01,
+        height_shaping: float = 0.0,
+        image_size: tuple[int, int] = (84, 84),
+        render_mode: str | None = None,
+    ) -> None:
+        _check_choice("obs_type", obs_type, OBS_TYPES)
+        _check_choice("action_type", action_type, ACTION_TYPES)
+        _check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
+        for name, value in (("reward_scale", reward_scale), ("height_shaping", height_shaping)):
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
+        if isinstance(balls, bool) or not isinstance(balls, (int, np.integer)) or balls < 1:
+            raise ValueError(f"balls must be an integer >= 1, got {balls!r}")
+        if len(image_size) != 2 or min(image_size) < 16:
+            raise ValueError(f"image_size must be (height, width), each >= 16, got {image_size}")
+
+        self.table = table if isinstance(table, Table) else load_table(table)
+        self.obs_type = obs_type
+        self.action_type = action_type
+        self.reward_scale = float(reward_scale)
+        self.height_shaping = float(height_shaping)
+        self.render_mode = render_mode
+        self.metadata = {**self.metadata, "render_fps": self.table.simulation.frame_rate}
+        self.game = Game(self.table, n_envs=1, balls=int(balls))
+
+        if action_type == "discrete":
+            self.action_space = spaces.Discrete(len(DISCRETE_BUTTONS))
+        else:
+            self.action_space = spaces.MultiBinary(2)
+        self.image_size = (int(image_size[0]), int(image_size[1]))
+        if obs_type == "state":
+            low, high = self.game.observation_bounds()
+            self.observation_space = spaces.Box(low, high, dtype=np.float32)
+            self._obs_renderer = None
+        else:
+            channels = 3 if obs_type == "rgb" else 1
+            shape = (*self.image_size, channels)
+            self.observation_space = spaces.Box(0, 255, shape, dtype=np.uint8)
+            height, width = self.image_size
+            self._obs_renderer = Renderer(self.table, width, height)
+        self._frame_renderer: Renderer | None = None
+        self._window: Window | None = None
+
+    # --- Gymnasium API ----------------------------------------------------------------------
+
+    def reset(
+        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        options = dict(options or {})
+        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        if unknown:
+            raise ValueError(
+                f"unknown reset option(s) {', '.join(map(repr, unknown))} "
+                f"(allowed: {', '.join(RESET_OPTIONS)})"
+            )
+        self.game.new_game(0, self.np_random)
+        if options:
+            world = self.game.world
+            position = options.get("ball_position", self.table.plunger.position)
+            velocity = options.get("ball_velocity", (0.0, 0.0))
+            position, velocity = check_ball_state(self.table, position, velocity, "reset options")
+            world.place_ball(0, position, velocity)
+        if self.render_mode == "human":
+            self.render()
+        return self._observe(), self._info(points=0, drained=False)
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if not self.action_space.contains(action):
+            raise ValueError(
+                f"invalid action {action!r}: expected an element of {self.action_space}"
+            )
+        if self.action_type == "discrete":
+            buttons = DISCRETE_BUTTONS[int(action)]
+        else:
+            buttons = np.asarray(action, dtype=bool)
+        height_before = self.game.world.balls[0, 1]
+        points, drained, game_over = self.game.step(buttons[None, :], [self.np_random])
+        reward = float(points[0]) * self.reward_scale
+        if self.height_shaping and not drained[0]:
+            rise = (self.game.world.balls[0, 1] - height_before) / self.table.height
+            reward += self.height_shaping * rise
+        if self.render_mode == "human":
+            self.render()
+        info = self._info(points=int(points[0]), drained=bool(drained[0]))
+        return self._observe(), reward, bool(game_over[0]), False, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' or "
+                "'human' to gym.make"
+            )
+            return None
+        if self._frame_renderer is None:
+            self._frame_renderer = Renderer(self.table, *render_size(self.table))
+        frame = self._frame_renderer.frame(*self._moving_parts())
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:
+            self._window = Window((frame.shape[1], frame.shape[0]), self.metadata["render_fps"])
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        # A pygame window cannot be pickled; a copy opens its own when it first renders.
+        state = self.__dict__.copy()
+        state["_window"] = None
+        return state
+
+    # --- helpers ----------------------------------------------------------------------------
+
+    def _moving_parts(self) -> tuple[tuple[float, float] | None, np.ndarray]:
+        world = self.game.world
+        ball = tuple(world.balls[0, :2]) if world.active[0] else None
+        return ball, world.state.flipper_angle[0]
+
+    def _observe(self) -> np.ndarray:
+        if self._obs_renderer is None:
+            return self.game.observe()[0]
+        if self.obs_type == "rgb":
+            return self._obs_renderer.frame(*self._moving_parts())
+        return self._obs_renderer.grayscale(*self._moving_parts())
+
+    def _info(self, points: int, drained: bool) -> dict[str, Any]:
+        return {
+            **self.game.ball_info(0),
+            "score": int(self.game.score[0]),
+            "balls_left": int(self.game.balls_left[0]),
+            "events": self.game.events(0),
+            "points": points,
+            "drained": drained,
+        }
+
+
+def _check_choice(name: str, value: object, choices: tuple[object, ...]) -> None:
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")

@@ -1,0 +1,292 @@
+"""Pixel pictures of a table and its moving parts, for observations and for watching.
+
+:class:`Renderer` rasterises with numpy alone (no display, no pygame): the static layer (playfield,
+sensors, walls, posts) once, then per frame a copy of it with the flippers and the ball painted
+over their pixel bounding boxes only. :class:`Window` is a thin pygame window for
+``render_mode="human"``.
+
+Image row 0 is the top of the table (y = height) and x grows to the right; the centre of pixel
+(row i, column j) is the world point ((j + 0.5) * width / W, height - (i + 0.5) * height / H).
+Shapes are sized in pixels so that they stay visible at any resolution, including a stretched
+84x84 observation: a line covers every pixel centre within ``max(0.6 px, its half-width)`` of it,
+and a disc or flipper every pixel centre inside it or within 0.5 px of its outline.
+"""
+
+import math
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from pinball_env.table import Table
+
+Colour = Sequence[int] | np.ndarray  # (R, G, B), or (luma,) for the grayscale layer
+
+# Colours (R, G, B). Chosen so that in grayscale the ball is the brightest thing and the flippers
+# stand well clear of the background.
+BACKGROUND = (16, 20, 32)
+WALL = (165, 180, 205)
+ONE_SIDED = (240, 135, 45)
+KICKER = (225, 55, 65)
+POST = (40, 155, 140)
+SENSOR = (62, 72, 92)
+DRAIN = (92, 52, 62)
+FLIPPER = (250, 195, 60)
+BALL = (248, 248, 252)
+
+# ITU-R BT.601 luma weights (as PIL's "L" mode and OpenCV use), in thousandths so that the
+# grayscale image is computed in exact integer arithmetic.
+LUMA_WEIGHTS = (299, 587, 114)
+
+WALL_HALF_WIDTH = 0.002  # [m]: walls are drawn 4 mm wide (more where a pixel is coarser)
+SENSOR_HALF_WIDTH = 0.001  # [m]
+MIN_LINE_HALF_WIDTH = 0.6  # [px]: a line is never thinner than about one pixel
+OUTLINE_BAND = 0.5  # [px]: discs and flippers also cover pixels this close to their outline
+
+
+def luminance(colour: Colour) -> np.ndarray:
+    """BT.601 luma of uint8 RGB values (last axis), rounded, as uint8 with that axis kept as 1."""
+    rgb = np.asarray(colour, dtype=np.uint32)
+    luma = (rgb * np.array(LUMA_WEIGHTS, dtype=np.uint32)).sum(axis=-1, keepdims=True)
+    return ((luma + 500) // 1000).astype(np.uint8)
+
+
+_FLIPPER_LUMA = luminance(FLIPPER)
+_BALL_LUMA = luminance(BALL)
+
+
+def render_size(table: Table, pixels_per_metre: float = 600.0) -> tuple[int, int]:
+    """(width, height) in pixels for an aspect-correct picture of the table."""
+    if not pixels_per_metre > 0.0:
+        raise ValueError(f"pixels_per_metre must be positive, got {pixels_per_metre!r}")
+    return (
+        max(1, round(table.width * pixels_per_metre)),
+        max(1, round(table.height * pixels_per_metre)),
+    )
+
+
+class Renderer:
+    """Draws a table into (height, width, 3) uint8 frames; the table fills the image (stretched if
+    the aspect differs). The static layer (playfield, walls, posts, sensors) is rasterised once in
+    __init__; each frame copies it and draws the flippers and the ball."""
+
+    def __init__(self, table: Table, width: int, height: int) -> None:
+        if width < 1 or height < 1:
+            raise ValueError(f"image size must be at least 1x1, got {width}x{height}")
+        self.table = table
+        self.width = int(width)
+        self.height = int(height)
+        self._sx = self.width / table.width  # [px/m]
+        self._sy = self.height / table.height
+        # World coordinates of the pixel centres, by column and by row.
+        self._xs = (np.arange(self.width) + 0.5) / self._sx
+        self._ys = table.height - (np.arange(self.height) + 0.5) / self._sy
+        # Anisotropic images: a world length maps to pixels at the geometric mean scale.
+        scale = math.sqrt(self._sx * self._sy)
+        self._flippers = [
+            (f.pivot[0], f.pivot[1], f.length, f.base_radius, f.tip_radius) for f in table.flippers
+        ]
+
+        rgb = np.empty((self.height, self.width, 3), dtype=np.uint8)
+        rgb[...] = BACKGROUND
+        for sensor in table.sensors:
+            colour = DRAIN if sensor.drain else SENSOR
+            self._line(rgb, sensor.segment, SENSOR_HALF_WIDTH * scale, colour)
+        for wall in table.walls:
+            colour = ONE_SIDED if wall.one_sided else KICKER if wall.kick > 0 else WALL
+            for segment in wall.segments():
+                self._line(rgb, segment, WALL_HALF_WIDTH * scale, colour)
+        for post in table.posts:
+            self._disc(rgb, *post.center, post.radius, KICKER if post.kick > 0 else POST)
+        rgb.flags.writeable = False  # frames copy it; nothing may paint on it
+        self._static_rgb = rgb
+        # Every colour is painted solid, so the grayscale image is the same drawing in luma:
+        # keeping a gray static layer saves converting whole frames.
+        self._static_gray = luminance(rgb)
+        self._static_gray.flags.writeable = False
+
+    def frame(
+        self, ball_position: tuple[float, float] | None, flipper_angles: Sequence[float]
+    ) -> np.ndarray:
+        """The table with the flippers at ``flipper_angles`` [rad] (one per ``table.flippers``
+        entry, in order) and the ball at ``ball_position`` [m] (None: out of play, not drawn),
+        as a new (height, width, 3) uint8 array."""
+        return self._draw(self._static_rgb, ball_position, flipper_angles, FLIPPER, BALL)
+
+    def grayscale(
+        self, ball_position: tuple[float, float] | None, flipper_angles: Sequence[float]
+    ) -> np.ndarray:
+        """:meth:`frame` as (height, width, 1) uint8 luma (:data:`LUMA_WEIGHTS`)."""
+        return self._draw(
+            self._static_gray, ball_position, flipper_angles, _FLIPPER_LUMA, _BALL_LUMA
+        )
+
+    def _draw(
+        self,
+        static: np.ndarray,
+        ball_position: tuple[float, float] | None,
+        flipper_angles: Sequence[float],
+        flipper_colour: Colour,
+        ball_colour: Colour,
+    ) -> np.ndarray:
+        if len(flipper_angles) != len(self._flippers):
+            raise ValueError(
+                f"expected {len(self._flippers)} flipper angles, got {len(flipper_angles)}"
+            )
+        image = static.copy()
+        for flipper, angle in zip(self._flippers, flipper_angles, strict=True):
+            self._capsule(image, *flipper, float(angle), flipper_colour)
+        if ball_position is not None:
+            x, y = ball_position
+            self._disc(image, float(x), float(y), self.table.ball.radius, ball_colour)
+        return image
+
+    def _box(
+        self, x0: float, y0: float, x1: float, y1: float, margin: int
+    ) -> tuple[slice, slice] | None:
+        """Rows and columns of the pixels around the world box [x0, x1] x [y0, y1], widened by
+        ``margin`` pixels; None if that misses the image."""
+        if not math.isfinite(x0 + y0 + x1 + y1):
+            return None
+        c0 = max(0, math.floor(x0 * self._sx) - margin)
+        c1 = min(self.width, math.ceil(x1 * self._sx) + margin)
+        r0 = max(0, math.floor((self.table.height - y1) * self._sy) - margin)
+        r1 = min(self.height, math.ceil((self.table.height - y0) * self._sy) + margin)
+        if c0 >= c1 or r0 >= r1:
+            return None
+        return slice(r0, r1), slice(c0, c1)
+
+    def _line(
+        self,
+        image: np.ndarray,
+        segment: tuple[float, float, float, float],
+        half_width: float,
+        colour: Colour,
+    ) -> None:
+        """Paint pixels whose centre lies within ``half_width`` px of the segment, measured in
+        pixel coordinates so that a line keeps its width in a stretched image."""
+        half_width = max(MIN_LINE_HALF_WIDTH, half_width)
+        x0, y0, x1, y1 = segment
+        box = self._box(min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1), math.ceil(half_width))
+        if box is None:
+            return
+        rows, cols = box
+        # Segment ends and pixel centres in pixel coordinates (column, row).
+        ax, ay = x0 * self._sx, (self.table.height - y0) * self._sy
+        bx, by = x1 * self._sx, (self.table.height - y1) * self._sy
+        px = np.arange(cols.start, cols.stop)[None, :] + 0.5 - ax
+        py = np.arange(rows.start, rows.stop)[:, None] + 0.5 - ay
+        dx, dy = bx - ax, by - ay
+        length2 = dx * dx + dy * dy
+        t = np.clip((px * dx + py * dy) / length2, 0.0, 1.0) if length2 > 0.0 else 0.0
+        mask = (px - t * dx) ** 2 + (py - t * dy) ** 2 <= half_width * half_width
+        image[rows, cols][mask] = colour
+
+    def _disc(self, image: np.ndarray, cx: float, cy: float, radius: float, colour: Colour) -> None:
+        """Paint a world disc (an ellipse in a stretched image) plus its 0.5 px outline band."""
+        box = self._box(cx - radius, cy - radius, cx + radius, cy + radius, 1)
+        if box is None:
+            return
+        rows, cols = box
+        dx = self._xs[cols][None, :] - cx
+        dy = self._ys[rows][:, None] - cy
+        dx2, dy2 = dx * dx, dy * dy
+        distance = np.sqrt(dx2 + dy2)
+        # Outside, the pixel distance to the outline is to first order the world distance
+        # d = |q| - r over the size of its gradient in pixel coordinates, |(nx / sx, ny / sy)|
+        # with n = q / |q| (exact when sx = sy). Both sides multiplied by |q| to avoid dividing.
+        gradient = np.sqrt(dx2 / self._sx**2 + dy2 / self._sy**2)
+        mask = (distance - radius) * distance <= OUTLINE_BAND * gradient
+        image[rows, cols][mask] = colour
+
+    def _capsule(
+        self,
+        image: np.ndarray,
+        px: float,
+        py: float,
+        length: float,
+        rb: float,
+        rt: float,
+        angle: float,
+        colour: Colour,
+    ) -> None:
+        """Paint a flipper: the tapered capsule of ``physics.flipper.capsule_distance`` turned to
+        ``angle`` about its pivot (px, py), plus its 0.5 px outline band."""
+        c, s = math.cos(angle), math.sin(angle)
+        tx, ty = px + length * c, py + length * s
+        box = self._box(
+            min(px - rb, tx - rt),
+            min(py - rb, ty - rt),
+            max(px + rb, tx + rt),
+            max(py + rb, ty + rt),
+            1,
+        )
+        if box is None:
+            return
+        rows, cols = box
+        dx = self._xs[cols][None, :] - px
+        dy = self._ys[rows][:, None] - py
+        # Flipper frame: u along pivot -> tip, w = |v| across (the capsule is symmetric in v).
+        u = dx * c + dy * s
+        v = dy * c - dx * s
+        w = np.abs(v)
+        face_nx = (rb - rt) / length  # outward normal of the upper tangent face: (nx, ny)
+        face_ny = math.sqrt(1.0 - face_nx * face_nx)
+        along = u * face_ny - w * face_nx  # along the face, from its base tangent point
+        tip = along > length * face_ny
+        # Nearest feature: base circle (along < 0), tip circle, or the face between them.
+        cu = np.where(tip, u - length, u)  # offset from the nearest circle's centre
+        r = np.where(tip, rt, rb)
+        to_circle = np.sqrt(cu * cu + w * w)
+        on_face = (along >= 0.0) & ~tip
+        distance = np.where(on_face, u * face_nx + w * face_ny - rb, to_circle - r)
+        # Local outward normal (nu, nw), then its gradient length in pixel coordinates (see
+        # _disc); the normal is a unit vector, so to_circle is replaced by 1 on the face.
+        safe = np.where(to_circle > 0.0, to_circle, 1.0)
+        nu = np.where(on_face, face_nx, cu / safe)
+        nw = np.where(on_face, face_ny, w / safe)
+        nv = np.copysign(nw, v)
+        gradient = np.hypot((c * nu - s * nv) / self._sx, (s * nu + c * nv) / self._sy)
+        mask = distance <= OUTLINE_BAND * gradient
+        image[rows, cols][mask] = colour
+
+
+class Window:
+    """A pygame window showing frames at a fixed rate (render_mode="human")."""
+
+    def __init__(self, size: tuple[int, int], fps: float, title: str = "Pinball") -> None:
+        os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+        try:
+            import pygame
+        except ImportError as error:
+            from gymnasium.error import DependencyNotInstalled
+
+            raise DependencyNotInstalled(
+                'pygame is not installed: pip install -e ".[render]"'
+            ) from error
+        self._pygame = pygame
+        self.size = (int(size[0]), int(size[1]))
+        self.fps = float(fps)
+        pygame.display.init()
+        pygame.display.set_caption(title)
+        self._screen = pygame.display.set_mode(self.size)
+        self._clock = pygame.time.Clock()
+        self._open = True
+
+    def show(self, frame: np.ndarray) -> None:
+        """Blit an (H, W, 3) uint8 frame (scaled to the window if needed), pump the event queue
+        so the window stays responsive, and wait to hold ``fps``."""
+        pygame = self._pygame
+        surface = pygame.surfarray.make_surface(np.ascontiguousarray(frame.swapaxes(0, 1)))
+        if surface.get_size() != self.size:
+            surface = pygame.transform.scale(surface, self.size)
+        self._screen.blit(surface, (0, 0))
+        pygame.event.pump()
+        pygame.display.flip()
+        self._clock.tick(self.fps)
+
+    def close(self) -> None:
+        """Close the window (safe to call twice)."""
+        if self._open:
+            self._pygame.display.quit()
+            self._open = False
