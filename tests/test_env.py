@@ -58,6 +58,13 @@ def test_registration_and_time_limit():
     assert env.observation_space.dtype == np.float32
 
 
+def test_table_by_name_or_yaml_path():
+    by_path = gym.make("Pinball-v0", table=str(ROOT / "configs" / "tables" / "classic.yaml"))
+    by_name = gym.make("Pinball-v0", table="classic")
+    assert by_path.unwrapped.table.walls == by_name.unwrapped.table.walls
+    assert by_path.reset(seed=1)[0].tobytes() == by_name.reset(seed=1)[0].tobytes()
+
+
 @pytest.mark.parametrize("obs_type", OBS_TYPES)
 @pytest.mark.parametrize("action_type", ["discrete", "multibinary"])
 def test_checkers_pass_without_warnings(obs_type, action_type):
