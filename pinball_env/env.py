@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from pinball_env.backends import PHYSICS
 from pinball_env.game import DISCRETE_BUTTONS, Game
 from pinball_env.render import Renderer, Window, render_size
 from pinball_env.table import Table, check_ball_state, load_table
@@ -100,7 +101,8 @@ class PinballEnv(gym.Env):
 
     ```python
     gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
-             reward_scale=0.01, height_shaping=0.0, image_size=(84, 84), render_mode=None)
+             reward_scale=0.01, height_shaping=0.0, image_size=(84, 84), physics="swept",
+             render_mode=None)
     ```
 
     - ``table``: a table name from ``configs/tables`` or a path to a table YAML file.
@@ -110,6 +112,8 @@ class PinballEnv(gym.Env):
     - ``reward_scale``: reward per point.
     - ``height_shaping``: weight of the optional height shaping term (0 = off).
     - ``image_size``: (height, width) of image observations, in pixels.
+    - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
+      pymunk, for cross-checks; needs the ``crosscheck`` extra).
     - ``render_mode``: ``"human"`` (a pygame window at ``render_fps``, needs the ``render``
       extra) or ``"rgb_array"`` (an aspect-correct uint8 HxWx3 frame, no display needed).
 
@@ -129,10 +133,12 @@ class PinballEnv(gym.Env):
         reward_scale: float = 0.01,
         height_shaping: float = 0.0,
         image_size: tuple[int, int] = (84, 84),
+        physics: str = "swept",
         render_mode: str | None = None,
     ) -> None:
         _check_choice("obs_type", obs_type, OBS_TYPES)
         _check_choice("action_type", action_type, ACTION_TYPES)
+        _check_choice("physics", physics, PHYSICS)
         _check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
         for name, value in (("reward_scale", reward_scale), ("height_shaping", height_shaping)):
             if not isinstance(value, (int, float)) or not math.isfinite(value):
@@ -149,7 +155,8 @@ class PinballEnv(gym.Env):
         self.height_shaping = float(height_shaping)
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.table.simulation.frame_rate}
-        self.game = Game(self.table, n_envs=1, balls=int(balls))
+        self.physics = physics
+        self.game = Game(self.table, n_envs=1, balls=int(balls), physics=physics)
 
         if action_type == "discrete":
             self.action_space = spaces.Discrete(len(DISCRETE_BUTTONS))

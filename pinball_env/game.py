@@ -6,9 +6,10 @@ Everything here is vectorised over the env axis; the physics is the World's kern
 
 import numpy as np
 
+from pinball_env.backends import make_world
 from pinball_env.physics.layout import BALL_VX, BALL_VY, BALL_X, BALL_Y, FLIPPER_REST_ANGLE
 from pinball_env.table import Table
-from pinball_env.world import LEFT, RIGHT, World
+from pinball_env.world import LEFT, RIGHT
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
 # real ball rarely exceeds 10 m/s on a table (a full flip at the tip gives about 5 m/s).
@@ -27,7 +28,7 @@ class Game:
         score: (n_envs,) points scored in the current game.
     """
 
-    def __init__(self, table: Table, n_envs: int, balls: int) -> None:
+    def __init__(self, table: Table, n_envs: int, balls: int, physics: str = "swept") -> None:
         if table.plunger is None:
             raise ValueError(f"table {table.name!r} has no plunger: a game needs one to launch")
         if not table.flippers:
@@ -36,7 +37,7 @@ class Game:
             raise ValueError(f"balls must be >= 1, got {balls}")
         self.table = table
         self.balls = balls
-        self.world = World(table, n_envs)
+        self.world = make_world(table, n_envs, physics)
         self.balls_left = np.zeros(n_envs, dtype=np.int64)
         self.score = np.zeros(n_envs, dtype=np.int64)
         flippers = self.world.packed.flippers

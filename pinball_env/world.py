@@ -144,6 +144,10 @@ class World:
             self.state.flipper_command[:] = np.asarray(buttons, dtype=bool)[
                 :, self._flipper_buttons
             ]
+        self._advance()
+
+    def _advance(self) -> None:
+        """One frame of physics on the state arrays: the swept-collision kernel."""
         step_world(self.geometry, self.settings, self.state)
 
     def frame_points(self) -> np.ndarray:

@@ -1,0 +1,262 @@
+"""The same table built in pymunk (Chipmunk2D), behind the World interface, for cross-checks.
+
+``PymunkWorld`` is a :class:`~pinball_env.world.World` whose frame is simulated by pymunk
+instead of the swept kernel: one ``pymunk.Space`` per env, built from the same validated table.
+
+- walls are static ``Segment`` shapes, posts and bumpers static ``Circle`` shapes; a one-sided
+  wall ignores a ball whose centre is behind it (pymunk has no one-sided segments);
+- the ball is a dynamic circle with the moment of inertia of a solid sphere, 2/5 m r^2, so its
+  spin matches ours;
+- flippers are kinematic bodies made of the base circle, the tip circle and the quadrilateral
+  between their tangent points, driven by exactly the same angle schedule as the kernel's
+  (the same :func:`~pinball_env.physics.world.flipper_motion`): in each substep the body turns at
+  the angular velocity that takes it from the kernel's start angle to its end angle;
+- materials map to ``elasticity`` (restitution) and ``friction``: the ball's own are 1, and
+  pymunk multiplies the two shapes' values; kickers add their kick along the contact normal once
+  per new contact;
+- gravity, frame rate and substeps are the table's; sensors and the drain are the kernel's own
+  crossing test on the ball centre's path over each substep.
+
+What pymunk does not have, and the cross-check measures: continuous collision (it finds overlaps
+after they happen, so a fast ball can pass through a thin wall or a flipper within one substep),
+and the inelastic resting-contact threshold (it relies on its slop and bias instead).
+
+The state arrays (``self.state``) stay the single source of truth: each frame writes them into
+the pymunk bodies, steps the spaces, and reads the bodies back. So everything built on World
+(``Game``, ``PinballEnv(physics="pymunk")``) runs on pymunk unchanged.
+"""
+
+import math
+from typing import Any
+
+import numpy as np
+
+from pinball_env.physics.layout import (
+    BALL_SPIN,
+    BALL_VX,
+    BALL_VY,
+    BALL_X,
+    BALL_Y,
+    PROP_FRICTION,
+    PROP_KICK,
+    PROP_RESTITUTION,
+)
+from pinball_env.physics.world import flipper_motion, log_contact, sensor_crossing
+from pinball_env.table import Table
+from pinball_env.world import World
+
+try:
+    import pymunk
+except ImportError as error:  # pragma: no cover - depends on the install
+    raise ImportError('the pymunk backend needs pymunk: pip install -e ".[crosscheck]"') from error
+
+# Chipmunk's defaults assume pixels; in metres they would let the ball sink 10 cm into a wall.
+COLLISION_SLOP = 1e-4  # [m] overlap allowed before the position correction acts
+SOLVER_ITERATIONS = 20  # more than the default 10: stacked contacts (cradles) settle better
+BALL_COLLISION_TYPE = 1
+
+
+class PymunkWorld(World):
+    """``n_envs`` games on one table, each simulated by its own pymunk space."""
+
+    def __init__(self, table: Table, n_envs: int = 1) -> None:
+        self._spaces: list[_EnvSpace] = []
+        super().__init__(table, n_envs)
+        self._spaces = [_EnvSpace(self, env) for env in range(n_envs)]
+
+    def _advance(self) -> None:
+        for env_space in self._spaces:
+            env_space.advance_frame()
+
+    def __getstate__(self) -> dict[str, Any]:
+        # Spaces hold callbacks into this object; they are rebuilt from the state arrays.
+        state = self.__dict__.copy()
+        state["_spaces"] = []
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._spaces = [_EnvSpace(self, env) for env in range(self.n_envs)]
+
+
+class _EnvSpace:
+    """The pymunk space of one env, and the bookkeeping that mirrors the kernel's outputs."""
+
+    def __init__(self, world: PymunkWorld, env: int) -> None:
+        self.world = world
+        self.env = env
+        table = world.table
+        packed = world.packed
+        space = pymunk.Space()
+        space.gravity = table.gravity_vector
+        space.collision_slop = COLLISION_SLOP
+        space.iterations = SOLVER_ITERATIONS
+        self.space = space
+        self.time = 0.0  # seconds since the start of the frame, for the contact log
+        self.pending_kicks: list[tuple[float, float, float]] = []
+
+        static = space.static_body
+        for element, (x0, y0, x1, y1) in enumerate(packed.segments):
+            shape = pymunk.Segment(static, (x0, y0), (x1, y1), 0.0)
+            self._add_element(shape, element, packed.segment_props[element])
+            shape.one_sided = bool(packed.segment_one_sided[element])
+            shape.blocking_normal = (-(y1 - y0), x1 - x0)  # rot+90(P1 - P0)
+            shape.anchor = (x0, y0)
+        offset = len(packed.segments)
+        for j, (x, y, radius) in enumerate(packed.circles):
+            shape = pymunk.Circle(static, radius, offset=(x, y))
+            self._add_element(shape, offset + j, packed.circle_props[j])
+        offset += len(packed.circles)
+        self.flipper_bodies = []
+        for j, flipper in enumerate(table.flippers):
+            body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+            body.position = flipper.pivot
+            space.add(body)
+            for shape in _flipper_shapes(body, flipper.length, flipper.base_radius,
+                                         flipper.tip_radius):  # fmt: skip
+                self._add_element(shape, offset + j, packed.flipper_props[j])
+            self.flipper_bodies.append(body)
+
+        mass = table.ball.mass
+        radius = table.ball.radius
+        self.ball = pymunk.Body(mass, 0.4 * mass * radius * radius)  # solid sphere
+        self.ball_shape = pymunk.Circle(self.ball, radius)
+        self.ball_shape.elasticity = 1.0  # pymunk multiplies: the surface's value is the result
+        self.ball_shape.friction = 1.0
+        self.ball_shape.collision_type = BALL_COLLISION_TYPE
+        self.ball_in_space = False
+        space.on_collision(BALL_COLLISION_TYPE, None, begin=self._begin, pre_solve=self._pre_solve)
+
+    def _add_element(self, shape: "pymunk.Shape", element: int, props: np.ndarray) -> None:
+        shape.elasticity = float(props[PROP_RESTITUTION])
+        shape.friction = float(props[PROP_FRICTION])
+        shape.kick = float(props[PROP_KICK])
+        shape.element = element
+        shape.one_sided = False
+        self.space.add(shape)
+
+    # --- collision callbacks ------------------------------------------------------------------
+
+    def _other(self, arbiter: "pymunk.Arbiter") -> tuple["pymunk.Shape", float, float]:
+        """The shape the ball touches and the contact normal pointing towards the ball."""
+        ball_shape, other = arbiter.shapes
+        nx, ny = arbiter.normal  # from the first shape (the ball) to the second
+        return other, -nx, -ny
+
+    def _pre_solve(self, arbiter: "pymunk.Arbiter", space: "pymunk.Space", data: Any) -> None:
+        other, _, _ = self._other(arbiter)
+        if other.one_sided:
+            # Behind a one-sided segment (the side its normal does not point to): pass through.
+            cx, cy = self.ball.position
+            ax, ay = other.anchor
+            if (cx - ax) * other.blocking_normal[0] + (cy - ay) * other.blocking_normal[1] < 0.0:
+                arbiter.process_collision = False
+
+    def _begin(self, arbiter: "pymunk.Arbiter", space: "pymunk.Space", data: Any) -> None:
+        other, nx, ny = self._other(arbiter)
+        if other.one_sided:
+            self._pre_solve(arbiter, space, data)
+            if not arbiter.process_collision:
+                return
+        points = arbiter.contact_point_set.points
+        contact = points[0].point_a if points else self.ball.position
+        surface = other.body.velocity_at_world_point(contact)
+        vx, vy = self.ball.velocity
+        speed = max(-((vx - surface.x) * nx + (vy - surface.y) * ny), 0.0)
+        state = self.world.state
+        log_contact(state, self.env, other.element, self.time, speed)
+        if speed >= self.world.settings.resting_speed or other.kick > 0.0:
+            state.hits[self.env, other.element] += 1
+        if other.kick > 0.0:
+            self.pending_kicks.append((other.kick, nx, ny))
+
+    # --- one frame ----------------------------------------------------------------------------
+
+    def advance_frame(self) -> None:
+        world, env = self.world, self.env
+        state, settings = world.state, world.settings
+        h = settings.dt / settings.substeps
+        state.contact_count[env] = 0
+        state.hits[env, :] = 0
+        self._sync_ball_in()
+        flippers = world.packed.flippers
+        first_sensor = len(world.packed.element_names) - len(world.packed.sensors)
+        for k in range(settings.substeps):
+            self.time = k * h
+            for j, body in enumerate(self.flipper_bodies):
+                start = state.flipper_angle[env, j]
+                target, omega, stop = flipper_motion(
+                    flippers[j], start, state.flipper_command[env, j]
+                )
+                end = target if stop <= h else start + omega * h
+                body.angle = start
+                body.angular_velocity = (end - start) / h
+                state.flipper_angle[env, j] = end
+                state.flipper_omega[env, j] = 0.0 if stop <= h else omega
+            before = self.ball.position
+            space_before = self.ball_in_space
+            self.space.step(h)
+            for j, body in enumerate(self.flipper_bodies):
+                body.angle = state.flipper_angle[env, j]  # exactly the kernel's angle
+            for kick, nx, ny in self.pending_kicks:
+                self.ball.velocity += (kick * nx, kick * ny)
+            self.pending_kicks.clear()
+            if not space_before:
+                continue
+            after = self.ball.position
+            dx, dy = after.x - before.x, after.y - before.y
+            for j, sensor in enumerate(world.packed.sensors):
+                u = sensor_crossing(before.x, before.y, dx, dy, sensor)
+                if u < math.inf:
+                    state.hits[env, first_sensor + j] += 1
+                    log_contact(state, env, first_sensor + j, self.time + u * h, 0.0)
+                    if world.packed.sensor_drain[j]:
+                        self.ball.position = (before.x + u * dx, before.y + u * dy)
+                        state.active[env] = False
+                        self._remove_ball()
+                        break
+        self._sync_ball_out()
+
+    def _sync_ball_in(self) -> None:
+        """Write the state arrays into the ball body (they may have been set from outside)."""
+        ball = self.world.state.balls[self.env]
+        if not self.world.state.active[self.env]:
+            self._remove_ball()
+            return
+        self.ball.position = (ball[BALL_X], ball[BALL_Y])
+        self.ball.velocity = (ball[BALL_VX], ball[BALL_VY])
+        self.ball.angular_velocity = ball[BALL_SPIN]
+        if not self.ball_in_space:
+            self.space.add(self.ball, self.ball_shape)
+            self.ball_in_space = True
+
+    def _sync_ball_out(self) -> None:
+        ball = self.world.state.balls[self.env]
+        ball[BALL_X], ball[BALL_Y] = self.ball.position
+        ball[BALL_VX], ball[BALL_VY] = self.ball.velocity
+        ball[BALL_SPIN] = self.ball.angular_velocity
+
+    def _remove_ball(self) -> None:
+        if self.ball_in_space:
+            self.space.remove(self.ball, self.ball_shape)
+            self.ball_in_space = False
+
+
+def _flipper_shapes(
+    body: "pymunk.Body", length: float, base_radius: float, tip_radius: float
+) -> list["pymunk.Shape"]:
+    """The tapered capsule as pymunk shapes in the body frame (pivot at the origin, tip on +x):
+    both circles and the quadrilateral between their common tangent points."""
+    face_x = (base_radius - tip_radius) / length  # the faces' outward normal (face_x, +-face_y)
+    face_y = math.sqrt(1.0 - face_x * face_x)
+    quad = [
+        (base_radius * face_x, base_radius * face_y),
+        (length + tip_radius * face_x, tip_radius * face_y),
+        (length + tip_radius * face_x, -tip_radius * face_y),
+        (base_radius * face_x, -base_radius * face_y),
+    ]
+    return [
+        pymunk.Circle(body, base_radius),
+        pymunk.Circle(body, tip_radius, offset=(length, 0.0)),
+        pymunk.Poly(body, quad),
+    ]
