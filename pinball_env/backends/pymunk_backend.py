@@ -139,7 +139,7 @@ class _EnvSpace:
 
     def _other(self, arbiter: "pymunk.Arbiter") -> tuple["pymunk.Shape", float, float]:
         """The shape the ball touches and the contact normal pointing towards the ball."""
-        ball_shape, other = arbiter.shapes
+        _, other = arbiter.shapes
         nx, ny = arbiter.normal  # from the first shape (the ball) to the second
         return other, -nx, -ny
 
