@@ -65,16 +65,54 @@ def test_table_by_name_or_yaml_path():
     assert by_path.reset(seed=1)[0].tobytes() == by_name.reset(seed=1)[0].tobytes()
 
 
+@pytest.mark.parametrize("physics", ["swept", "pymunk"])
 @pytest.mark.parametrize("obs_type", OBS_TYPES)
 @pytest.mark.parametrize("action_type", ["discrete", "multibinary"])
-def test_checkers_pass_without_warnings(obs_type, action_type):
+def test_checkers_pass_without_warnings(obs_type, action_type, physics):
+    kwargs = {"obs_type": obs_type, "action_type": action_type, "physics": physics}
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        env = gym.make(
-            "Pinball-v0", obs_type=obs_type, action_type=action_type, render_mode="rgb_array"
-        )
+        env = gym.make("Pinball-v0", render_mode="rgb_array", **kwargs)
         check_env(env.unwrapped)
-        sb3_check_env(gym.make("Pinball-v0", obs_type=obs_type, action_type=action_type))
+        sb3_check_env(gym.make("Pinball-v0", **kwargs))
+
+
+def test_pymunk_backend_plays_a_game_with_the_same_spaces_reward_and_info():
+    swept = gym.make("Pinball-v0")
+    pym = gym.make("Pinball-v0", physics="pymunk")
+    assert swept.observation_space == pym.observation_space
+    assert swept.action_space == pym.action_space
+    obs_s, info_s = swept.reset(seed=3)
+    obs_p, info_p = pym.reset(seed=3)
+    assert obs_s.tobytes() == obs_p.tobytes()  # same plunger shot from the same seed
+    assert info_s.keys() == info_p.keys()
+    # A bumper hit scores the same on both.
+    options = {"ball_position": [0.2365, 0.70], "ball_velocity": [0.0, -1.0]}
+    for env in (swept, pym):
+        env.reset(seed=0, options=options)
+        events = {}
+        for _ in range(30):
+            _, reward, _, _, info = env.step(0)
+            events.update(info["events"])
+            if events:
+                break
+        assert events == {"bumper_bottom": 1} and reward == pytest.approx(1.0)
+    # And a drained ball ends the game the same way.
+    pym.reset(seed=0, options={"ball_position": [0.2365, 0.06], "ball_velocity": [0.0, -1.0]})
+    for _ in range(5):
+        _, _, _, _, info = pym.step(0)
+        if info["drained"]:
+            break
+    assert info["drained"] and info["balls_left"] == 2
+
+
+def test_pymunk_env_pickles():
+    env = gym.make("Pinball-v0", physics="pymunk")
+    env.reset(seed=0)
+    env.step(1)
+    copy = pickle.loads(pickle.dumps(env))
+    obs, *_ = copy.step(1)
+    assert copy.observation_space.contains(obs)
 
 
 def test_image_observations_and_frames_have_the_documented_shapes():
@@ -248,6 +286,7 @@ def test_multibinary_action_outside_the_space_is_an_error(action):
         ({"balls": 0}, ValueError, "balls must be"),
         ({"reward_scale": float("nan")}, ValueError, "reward_scale must be a finite"),
         ({"table": "box"}, ValueError, "has no plunger"),
+        ({"physics": "box2d"}, ValueError, "physics must be one of"),
     ],
 )
 @pytest.mark.filterwarnings("ignore:.*render_mode='ansi'")  # gymnasium's own warning first
