@@ -18,8 +18,9 @@ def test_low_speed_wall_bounces_agree_with_the_analytic_answer(engine):
 
 
 @pytest.mark.parametrize("engine", cc.ENGINES)
-def test_corner_and_post_hits_agree_with_the_analytic_answer(engine):
-    for row in cc.corner_hits([0.2, 0.5, 0.9]) + cc.post_hits([0.0, 0.5, 0.9]):
+def test_corner_post_and_bumper_hits_agree_with_the_analytic_answer(engine):
+    bumper_hits = cc.post_hits([0.0, 0.5, 0.9], restitution=0.9, kick=1.5)
+    for row in cc.corner_hits([0.2, 0.5, 0.9]) + cc.post_hits([0.0, 0.5, 0.9]) + bumper_hits:
         assert cc.agrees(row, engine, row["speed"]), row
 
 
