@@ -1,9 +1,10 @@
-"""Speed of the batched world step: ``python -m pinball_env.benchmark``.
+"""Speed of the batched world step and of the env: ``python -m pinball_env.benchmark``.
 
 Steps a batch of balls with random launches on a table and prints a table of figures plus a JSON
 line (``--json PATH`` also writes it to a file). The headline figure is the time per ball-element
-sweep test: every pass of the contact loop sweeps one ball against every segment and circle.
-Timings are wall-clock on a shared machine: compare figures measured in the same run.
+sweep test: every pass of the contact loop sweeps one ball against every wall, post and flipper.
+It also times ``Pinball-v0`` itself (one env, random actions), with state and with image
+observations. Timings are wall-clock on a shared machine: compare figures measured in one run.
 """
 
 import argparse
@@ -62,16 +63,38 @@ def measure(table: str, n_envs: int, frames: int, max_speed: float, seed: int) -
     }
 
 
+def measure_env(obs_type: str, steps: int, seed: int) -> float:
+    """Steps per second of one ``Pinball-v0`` env with random actions."""
+    import gymnasium as gym
+
+    import pinball_env  # noqa: F401  (registers Pinball-v0)
+
+    env = gym.make("Pinball-v0", obs_type=obs_type)
+    env.reset(seed=seed)
+    actions = np.random.default_rng(seed).integers(0, 4, size=steps)
+    env.step(0)  # compile outside the timing
+    start = time.perf_counter()
+    for action in actions:
+        _, _, terminated, truncated, _ = env.step(int(action))
+        if terminated or truncated:
+            env.reset()
+    return steps / (time.perf_counter() - start)
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--table", default="box", help="table name or YAML path")
+    parser.add_argument("--table", default="classic", help="table name or YAML path")
     parser.add_argument("--envs", type=int, default=1024, help="balls stepped together")
     parser.add_argument("--frames", type=int, default=600, help="frames timed")
     parser.add_argument("--max-speed", type=float, default=10.0, help="launch speeds [m/s]")
+    parser.add_argument("--env-steps", type=int, default=5000, help="Pinball-v0 steps timed")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the figures to this file")
     args = parser.parse_args(argv)
     result = measure(args.table, args.envs, args.frames, args.max_speed, args.seed)
+    for obs_type in ("state", "rgb"):
+        steps_per_second = measure_env(obs_type, args.env_steps, args.seed)
+        result[f"env_{obs_type}_steps_per_second"] = steps_per_second
     result["machine"] = platform.processor() or platform.machine()
     width = max(map(len, result))
     for key, value in result.items():
