@@ -17,7 +17,9 @@ import os
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit
 
+from pinball_env.physics.flipper import flipper_distance
 from pinball_env.table import Table
 
 Colour = Sequence[int] | np.ndarray  # (R, G, B), or (luma,) for the grayscale layer
@@ -210,8 +212,8 @@ class Renderer:
         angle: float,
         colour: Colour,
     ) -> None:
-        """Paint a flipper: the tapered capsule of ``physics.flipper.capsule_distance`` turned to
-        ``angle`` about its pivot (px, py), plus its 0.5 px outline band."""
+        """Paint a flipper turned to ``angle`` about its pivot (px, py), plus its 0.5 px outline
+        band."""
         c, s = math.cos(angle), math.sin(angle)
         tx, ty = px + length * c, py + length * s
         box = self._box(
@@ -224,31 +226,28 @@ class Renderer:
         if box is None:
             return
         rows, cols = box
-        dx = self._xs[cols][None, :] - px
-        dy = self._ys[rows][:, None] - py
-        # Flipper frame: u along pivot -> tip, w = |v| across (the capsule is symmetric in v).
-        u = dx * c + dy * s
-        v = dy * c - dx * s
-        w = np.abs(v)
-        face_nx = (rb - rt) / length  # outward normal of the upper tangent face: (nx, ny)
-        face_ny = math.sqrt(1.0 - face_nx * face_nx)
-        along = u * face_ny - w * face_nx  # along the face, from its base tangent point
-        tip = along > length * face_ny
-        # Nearest feature: base circle (along < 0), tip circle, or the face between them.
-        cu = np.where(tip, u - length, u)  # offset from the nearest circle's centre
-        r = np.where(tip, rt, rb)
-        to_circle = np.sqrt(cu * cu + w * w)
-        on_face = (along >= 0.0) & ~tip
-        distance = np.where(on_face, u * face_nx + w * face_ny - rb, to_circle - r)
-        # Local outward normal (nu, nw), then its gradient length in pixel coordinates (see
-        # _disc); the normal is a unit vector, so to_circle is replaced by 1 on the face.
-        safe = np.where(to_circle > 0.0, to_circle, 1.0)
-        nu = np.where(on_face, face_nx, cu / safe)
-        nw = np.where(on_face, face_ny, w / safe)
-        nv = np.copysign(nw, v)
-        gradient = np.hypot((c * nu - s * nv) / self._sx, (s * nu + c * nv) / self._sy)
+        distance, nx, ny = _flipper_field(
+            self._xs[cols], self._ys[rows], px, py, length, rb, rt, angle
+        )
+        # The outline band in pixels: the distance's gradient (the unit normal) in pixel units.
+        gradient = np.hypot(nx / self._sx, ny / self._sy)
         mask = distance <= OUTLINE_BAND * gradient
         image[rows, cols][mask] = colour
+
+
+@njit(cache=True)
+def _flipper_field(xs, ys, px, py, length, rb, rt, angle):
+    """Signed distance and outward normal of a flipper at every pixel centre of a box (the
+    kernel's own ``flipper_distance``), arrays of shape (len(ys), len(xs))."""
+    distance = np.empty((ys.shape[0], xs.shape[0]))
+    nx = np.empty_like(distance)
+    ny = np.empty_like(distance)
+    for i in range(ys.shape[0]):
+        for j in range(xs.shape[0]):
+            distance[i, j], nx[i, j], ny[i, j] = flipper_distance(
+                xs[j], ys[i], px, py, length, rb, rt, angle
+            )
+    return distance, nx, ny
 
 
 class Window:

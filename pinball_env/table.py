@@ -25,6 +25,7 @@ import numpy as np
 import yaml
 
 from pinball_env.physics import layout
+from pinball_env.physics.flipper import flipper_distance
 
 TABLES_DIR = Path(__file__).resolve().parent.parent / "configs" / "tables"
 _SUFFIXES = (".yaml", ".yml")
@@ -742,21 +743,11 @@ def _check_launch_path(plunger: Plunger, walls: tuple[Wall, ...], top: _Loc) -> 
 
 def _flipper_distance(p: tuple[float, float], flipper: Flipper, angle_deg: float) -> float:
     """Signed distance from ``p`` to the surface of ``flipper`` turned to ``angle_deg``."""
-    angle = math.radians(angle_deg)
-    dx, dy = p[0] - flipper.pivot[0], p[1] - flipper.pivot[1]
-    # Local frame: u along the flipper (pivot -> tip), v across it; the capsule is symmetric in v.
-    u = dx * math.cos(angle) + dy * math.sin(angle)
-    v = abs(-dx * math.sin(angle) + dy * math.cos(angle))
-    length, base, tip = flipper.length, flipper.base_radius, flipper.tip_radius
-    # (nx, ny): unit normal of the tangent line joining the two circles (|base - tip| < length).
-    nx = (base - tip) / length
-    ny = math.sqrt(1.0 - nx * nx)
-    s = u * ny - v * nx  # position along that tangent line
-    if s < 0.0:
-        return math.hypot(u, v) - base
-    if s > length * ny:
-        return math.hypot(u - length, v) - tip
-    return u * nx + v * ny - base
+    distance, _, _ = flipper_distance(
+        p[0], p[1], *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
+        math.radians(angle_deg),
+    )  # fmt: skip
+    return float(distance)
 
 
 def _segment_distance(p: tuple[float, float], segment: tuple[float, float, float, float]) -> float:
