@@ -3,8 +3,7 @@
 :class:`Renderer` rasterises with numpy (no display, no pygame; flippers through the kernel's
 compiled ``flipper_distance``): the static layer (playfield, sensors, walls, posts) once, then
 per frame a copy of it with the flippers and the ball painted over their pixel bounding boxes.
-:class:`Window` is a thin pygame window for
-``render_mode="human"``.
+:class:`Window` is a thin pygame window for ``render_mode="human"``.
 
 Image row 0 is the top of the table (y = height) and x grows to the right; the centre of pixel
 (row i, column j) is the world point ((j + 0.5) * width / W, height - (i + 0.5) * height / H).
