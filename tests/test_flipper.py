@@ -156,7 +156,7 @@ BOX_WALL = {
 }
 
 
-def flipper_world(slope_deg=0.0, friction=0.0, walls=True, substeps=10):
+def flipper_world(slope_deg=0.0, friction=0.0, walls=True, substeps=10, extra_walls=()):
     """A closed box (or nothing, ``walls=False``) with one left flipper: pivot (0.2, 0.3),
     rest -25 deg, up +25 deg."""
     data = {
@@ -168,7 +168,11 @@ def flipper_world(slope_deg=0.0, friction=0.0, walls=True, substeps=10):
             "wall": {"restitution": 0.3, "friction": friction},
             "flipper": {"restitution": 0.8, "friction": friction},
         },
-        "walls": [BOX_WALL] if walls else [],
+        "walls": ([BOX_WALL] if walls else [])
+        + [
+            {"name": f"extra{i}", "points": p, "material": "wall"}
+            for i, p in enumerate(extra_walls)
+        ],
         "simulation": {"substeps": substeps},
         "flippers": [
             {
@@ -345,3 +349,32 @@ def test_ball_dropped_on_a_resting_flipper_rolls_off_into_the_drain():
     assert not world.state.active[0]
     drain_y = CLASSIC.sensors[-1].points[0][1]
     assert world.balls[0, BALL_Y] == pytest.approx(drain_y, abs=1e-9)
+
+
+def test_flipper_stalls_against_a_ball_wedged_under_a_lid():
+    """A ball lying on the flipper under a lid 1 mm above it: energised, the flipper cannot
+    drive the ball through the lid; like a real coil it stalls while the ball is wedged (the
+    ball squeezes out sideways, as a pinched ball does), and it drops when released."""
+    x, rest = 0.245, math.radians(-25)  # 45 mm along the flipper from its pivot (0.2, 0.3)
+    low, high = 0.25, 0.4  # bisect for the height at which the ball sits on the face
+    for _ in range(100):
+        mid = (low + high) / 2
+        if flipper_distance(x, mid, 0.2, 0.3, L, RB, RT, rest)[0] < R + 1e-5:
+            low = mid
+        else:
+            high = mid
+    lid = high + R + 0.001
+    world = flipper_world(extra_walls=[[[0.02, lid], [0.49, lid]]])
+    world.place_ball(0, (x, high))
+    free_swing = rest + math.radians(50) / 0.022 / 60  # the angle after one unhindered frame
+    for frame in range(60):
+        world.step(LEFT_UP)
+        angle = world.state.flipper_angle[0, 0]
+        if frame == 0:
+            assert angle < free_swing - math.radians(10)  # held back by the wedged ball
+        assert world.balls[0, BALL_Y] <= lid - R  # never through the lid
+        gap = flipper_distance(*world.balls[0, :2], 0.2, 0.3, L, RB, RT, angle)[0]
+        assert gap >= R - 1e-6  # nor through the flipper
+    for _ in range(6):
+        world.step(RELEASED)
+    assert world.state.flipper_angle[0, 0] == rest  # free again once released

@@ -328,13 +328,24 @@ def step_world(geometry, settings, state):
                 targets[j], omegas[j], stops[j] = flipper_motion(
                     geometry.flippers[j], start_angles[j], state.flipper_command[i, j]
                 )
+            held = -1  # a flipper stopped by a ball wedged against it, and since when
+            held_time = 0.0
             if state.active[i]:
                 vx += settings.gravity_x * h
                 vy += settings.gravity_y * h
                 remaining = h
                 stalled = 0
-                for _ in range(settings.max_passes):
+                pusher = -1  # the last flipper that pushed into the ball in this substep
+                for _ in range(settings.max_passes + 1):
                     if remaining <= 0.0:
+                        break
+                    if _ == settings.max_passes or stalled >= MAX_STALLED_PASSES:
+                        # Wedged: the rest of the substep is dropped. A flipper pushing the
+                        # ball into something cannot crush it: like a real coil it stalls
+                        # there (a kinematic flipper would otherwise drive through the ball).
+                        if pusher >= 0:
+                            held = pusher
+                            held_time = h - remaining
                         break
                     elapsed = h - remaining
                     for j in range(n_flippers):
@@ -391,14 +402,19 @@ def step_world(geometry, settings, state):
                     log_contact(state, i, element, k * h + h - remaining, speed)
                     if speed >= settings.resting_speed or props[PROP_KICK] > 0.0:
                         state.hits[i, element] += 1
+                    if element >= n_segments + n_circles and svx * nx + svy * ny > 0.0:
+                        pusher = element - n_segments - n_circles
                     if used <= MIN_PROGRESS * h:
                         stalled += 1
-                        if stalled >= MAX_STALLED_PASSES:
-                            break
                     else:
                         stalled = 0
             for j in range(n_flippers):
-                if stops[j] <= h:
+                if j == held:
+                    state.flipper_angle[i, j] = start_angles[j] + omegas[j] * min(
+                        held_time, stops[j]
+                    )
+                    state.flipper_omega[i, j] = 0.0
+                elif stops[j] <= h:
                     state.flipper_angle[i, j] = targets[j]
                     state.flipper_omega[i, j] = 0.0
                 else:
