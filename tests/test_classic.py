@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from pinball_env.backends import make_world
 from pinball_env.physics.flipper import flipper_distance
 from pinball_env.physics.layout import BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.world import sensor_crossing
-from pinball_env.table import load_table
+from pinball_env.table import load_table, table_from_dict
 from pinball_env.world import World
 
 CLASSIC = load_table("classic")
@@ -178,3 +179,40 @@ def test_random_games_keep_the_ball_on_the_table():
             drains += 1
             world.launch(env, rng.uniform(low, high))
     assert drains > 50  # the games really were played to the drain, many times
+
+
+def sensor_table(sensors):
+    return table_from_dict(
+        {
+            "name": "sensors",
+            "playfield": {"width": 1.0, "height": 1.0},
+            "slope_deg": 0.0,
+            "ball": {"radius": R, "mass": 0.08, "start": [0.5, 0.9]},
+            "materials": {"m": {"restitution": 0.5, "friction": 0.3}},
+            "sensors": sensors,
+        }
+    )
+
+
+@pytest.mark.parametrize("physics", ["swept", "pymunk"])
+@pytest.mark.parametrize("drain_first", [True, False])
+def test_crossings_before_a_drain_count_whatever_the_listing_order(physics, drain_first):
+    drain = {"name": "drain", "points": [[0.1, 0.50], [0.9, 0.50]], "drain": True}
+    rollover = {"name": "rollover", "points": [[0.1, 0.505], [0.9, 0.505]], "score": 10}
+    sensors = [drain, rollover] if drain_first else [rollover, drain]
+    world = make_world(sensor_table(sensors), 1, physics)
+    world.place_ball(0, (0.5, 0.6), (0.0, -6.0))  # crosses both within one substep
+    total = 0
+    for _ in range(5):
+        world.step()
+        total += int(world.frame_points()[0])
+    assert total == 10 and not world.state.active[0]
+
+
+def test_sensors_meeting_end_to_end_count_a_crossing_at_the_joint_once():
+    left = {"name": "a", "points": [[0.1, 0.5], [0.5, 0.5]], "score": 10}
+    right = {"name": "b", "points": [[0.5, 0.5], [0.9, 0.5]], "score": 10}
+    world = World(sensor_table([left, right]))
+    world.place_ball(0, (0.5, 0.52), (0.0, -3.0))
+    world.step()
+    assert [c.name for c in world.frame_contacts()] == ["b"]

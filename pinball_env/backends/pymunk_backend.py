@@ -41,7 +41,7 @@ from pinball_env.physics.layout import (
     PROP_KICK,
     PROP_RESTITUTION,
 )
-from pinball_env.physics.world import flipper_motion, log_contact, sensor_crossing
+from pinball_env.physics.world import cross_sensors, flipper_motion, log_contact
 from pinball_env.table import Table
 from pinball_env.world import World
 
@@ -94,6 +94,7 @@ class _EnvSpace:
         self.space = space
         self.time = 0.0  # seconds since the start of the frame, for the contact log
         self.pending_kicks: list[tuple[float, float, float]] = []
+        self.crossings = np.empty(len(world.packed.sensors))
 
         static = space.static_body
         for element, (x0, y0, x1, y1) in enumerate(packed.segments):
@@ -205,16 +206,18 @@ class _EnvSpace:
                 continue
             after = self.ball.position
             dx, dy = after.x - before.x, after.y - before.y
-            for j, sensor in enumerate(world.packed.sensors):
-                u = sensor_crossing(before.x, before.y, dx, dy, sensor)
-                if u < math.inf:
+            drain = cross_sensors(
+                before.x, before.y, dx, dy, world.packed.sensors, world.packed.sensor_drain,
+                self.crossings,
+            )  # fmt: skip
+            for j, u in enumerate(self.crossings):
+                if u <= drain and u < math.inf:
                     state.hits[env, first_sensor + j] += 1
                     log_contact(state, env, first_sensor + j, self.time + u * h, 0.0)
-                    if world.packed.sensor_drain[j]:
-                        self.ball.position = (before.x + u * dx, before.y + u * dy)
-                        state.active[env] = False
-                        self._remove_ball()
-                        break
+            if drain < math.inf:
+                self.ball.position = (before.x + drain * dx, before.y + drain * dy)
+                state.active[env] = False
+                self._remove_ball()
         self._sync_ball_out()
 
     def _sync_ball_in(self) -> None:

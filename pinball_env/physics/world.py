@@ -263,9 +263,22 @@ def sensor_crossing(x, y, dx, dy, sensor):
         return INF
     u = side0 / (side0 - side1)
     along = ((x + dx * u - x0) * ex + (y + dy * u - y0) * ey) / (ex * ex + ey * ey)
-    if along < 0.0 or along > 1.0:
+    if along < 0.0 or along >= 1.0:  # half-open too: sensors meeting end to end count once
         return INF
     return u
+
+
+@njit(cache=True)
+def cross_sensors(x, y, dx, dy, sensors, sensor_drain, crossings):
+    """Fractions of the move (x, y) -> (x + dx, y + dy) at which the centre crosses each sensor,
+    written to ``crossings`` (inf for none). Returns the earliest drain crossing (inf for none):
+    the ball leaves play there, so only crossings up to it happen."""
+    drain = INF
+    for j in range(sensors.shape[0]):
+        crossings[j] = sensor_crossing(x, y, dx, dy, sensors[j])
+        if sensor_drain[j] and crossings[j] < drain:
+            drain = crossings[j]
+    return drain
 
 
 @njit(cache=True)
@@ -313,6 +326,7 @@ def step_world(geometry, settings, state):
     stops = np.empty(n_flippers)
     angles = np.empty(n_flippers)
     pass_stops = np.empty(n_flippers)
+    crossings = np.empty(geometry.sensors.shape[0])
     balls = state.balls
     for i in range(balls.shape[0]):
         state.contact_count[i] = 0
@@ -367,18 +381,18 @@ def step_world(geometry, settings, state):
                     move = min(t, 1.0)
                     # Sensors crossed on the way to the contact (or to the end of the substep).
                     used = remaining * move
-                    drained = False
+                    drain = cross_sensors(
+                        x, y, vx * used, vy * used, geometry.sensors, geometry.sensor_drain,
+                        crossings,
+                    )  # fmt: skip
                     for j in range(geometry.sensors.shape[0]):
-                        u = sensor_crossing(x, y, vx * used, vy * used, geometry.sensors[j])
-                        if u < INF:
+                        if crossings[j] <= drain and crossings[j] < INF:
                             state.hits[i, first_sensor + j] += 1
-                            log_contact(state, i, first_sensor + j, k * h + elapsed + used * u, 0.0)
-                            if geometry.sensor_drain[j]:
-                                x += vx * used * u
-                                y += vy * used * u
-                                drained = True
-                                break
-                    if drained:
+                            time = k * h + elapsed + used * crossings[j]
+                            log_contact(state, i, first_sensor + j, time, 0.0)
+                    if drain < INF:
+                        x += vx * used * drain
+                        y += vy * used * drain
                         state.active[i] = False
                         break
                     x += vx * used
