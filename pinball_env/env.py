@@ -189,13 +189,13 @@ class PinballEnv(gym.Env):
                 f"unknown reset option(s) {', '.join(map(repr, unknown))} "
                 f"(allowed: {', '.join(RESET_OPTIONS)})"
             )
-        self.game.new_game(0, self.np_random)
-        if options:
-            world = self.game.world
+        if options:  # checked before anything changes: a rejected reset leaves the env as it was
             position = options.get("ball_position", self.table.plunger.position)
             velocity = options.get("ball_velocity", (0.0, 0.0))
             position, velocity = check_ball_state(self.table, position, velocity, "reset options")
-            world.place_ball(0, position, velocity)
+        self.game.new_game(0, self.np_random)
+        if options:
+            self.game.world.place_ball(0, position, velocity)
         if self.render_mode == "human":
             self.render()
         return self._observe(), self._info(points=0, drained=False)

@@ -8,7 +8,7 @@ import numpy as np
 
 from pinball_env.backends import make_world
 from pinball_env.physics.layout import BALL_VX, BALL_VY, BALL_X, BALL_Y, FLIPPER_REST_ANGLE
-from pinball_env.table import Table
+from pinball_env.table import Table, enclosure
 from pinball_env.world import LEFT, RIGHT
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
@@ -33,6 +33,10 @@ class Game:
             raise ValueError(f"table {table.name!r} has no plunger: a game needs one to launch")
         if not table.flippers:
             raise ValueError(f"table {table.name!r} has no flippers: there is nothing to play")
+        if enclosure(table.walls) is None:
+            raise ValueError(f"table {table.name!r} has no closed outline wall to keep the ball in")
+        if not any(sensor.drain for sensor in table.sensors):
+            raise ValueError(f"table {table.name!r} has no drain sensor: a game could never end")
         if balls < 1:
             raise ValueError(f"balls must be >= 1, got {balls}")
         self.table = table

@@ -28,6 +28,9 @@ from pinball_env.physics import layout
 from pinball_env.physics.flipper import flipper_distance
 
 TABLES_DIR = Path(__file__).resolve().parent.parent / "configs" / "tables"
+# Fastest ball a table or a reset may set [m/s]: a real one rarely passes 10 m/s, and the flipper
+# contact's work grows with the speed.
+MAX_BALL_SPEED = 100.0
 _SUFFIXES = (".yaml", ".yml")
 
 
@@ -393,10 +396,25 @@ def _parses_as_float(text: str) -> bool:
 
 
 def _pair(value: object, loc: _Loc, item: Parser = _number) -> tuple[Any, Any]:
-    """An [x, y] pair of finite numbers (or of whatever ``item`` parses)."""
-    if not isinstance(value, (list, tuple)) or len(value) != 2:
+    """An [x, y] pair of finite numbers (or of whatever ``item`` parses); a list, a tuple or a
+    1-d numpy array (such as ``info["ball_position"]``)."""
+    pair_like = isinstance(value, (list, tuple)) or (
+        isinstance(value, np.ndarray) and value.ndim == 1
+    )
+    if not pair_like or len(value) != 2:
         loc.fail(f"expected a pair [x, y], got {_describe(value)}")
     return (item(value[0], loc.index(0)), item(value[1], loc.index(1)))
+
+
+def _velocity(value: object, loc: _Loc) -> tuple[float, float]:
+    """A finite [vx, vy] pair no faster than MAX_BALL_SPEED."""
+    vx, vy = _pair(value, loc)
+    if math.hypot(vx, vy) > MAX_BALL_SPEED:
+        loc.fail(
+            f"speed {math.hypot(vx, vy):g} m/s is above {MAX_BALL_SPEED:g} m/s "
+            "(no pinball moves that fast)"
+        )
+    return (vx, vy)
 
 
 def _point(value: object, loc: _Loc, width: float, height: float) -> tuple[float, float]:
@@ -468,15 +486,17 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     _check_pivots(flippers, walls, top)
 
     ball_loc = top.key("ball")
-    ball_parsers = {"radius": _positive, "mass": _positive, "start": point, "velocity": _pair}
+    ball_parsers = {"radius": _positive, "mass": _positive, "start": point, "velocity": _velocity}
     ball = _record(Ball, raw["ball"], ball_loc, ball_parsers)
     _check_clear(ball.start, ball.radius, walls, posts, flippers, ball_loc.key("start"))
+    _check_enclosed(ball.start, walls, ball_loc.key("start"))
 
     options: dict[str, Any] = {}
     if "plunger" in raw:
         options["plunger"] = plunger = _plunger(raw["plunger"], top.key("plunger"), point)
         position_loc = top.key("plunger").key("position")
         _check_clear(plunger.position, ball.radius, walls, posts, flippers, position_loc)
+        _check_enclosed(plunger.position, walls, position_loc)
         _check_launch_path(plunger, walls, top)
     if "slope_deg" in raw:
         options["slope_deg"] = _number(
@@ -486,9 +506,9 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
         options["gravity"] = _positive(raw["gravity"], top.key("gravity"))
     if "simulation" in raw:
         simulation_parsers = {
-            "frame_rate": _positive,
-            "substeps": partial(_number, low=1, integer=True),
-            "max_passes": partial(_number, low=1, integer=True),
+            "frame_rate": partial(_number, low=1.0, high=1000.0),
+            "substeps": partial(_number, low=1, high=1000, integer=True),
+            "max_passes": partial(_number, low=1, high=1000, integer=True),
             "skin": partial(_number, low=0.0, high=1e-3, open_low=True),
             "resting_speed": _non_negative,
         }
@@ -704,11 +724,43 @@ def _check_clear(
             )
 
 
+def enclosure(walls: tuple[Wall, ...]) -> Wall | None:
+    """The closed wall enclosing the largest area (the table's outline), or None."""
+    closed = [wall for wall in walls if wall.closed]
+    return max(closed, key=lambda wall: abs(_polygon_area(wall.points)), default=None)
+
+
+def _polygon_area(points: tuple[tuple[float, float], ...]) -> float:
+    """Signed area of a closed polygon (shoelace formula)."""
+    return 0.5 * sum(
+        x0 * y1 - x1 * y0
+        for (x0, y0), (x1, y1) in zip(points, points[1:] + points[:1], strict=True)
+    )
+
+
+def _inside(point: tuple[float, float], polygon: tuple[tuple[float, float], ...]) -> bool:
+    """Even-odd test: is ``point`` inside the closed ``polygon``?"""
+    x, y = point
+    inside = False
+    for (x0, y0), (x1, y1) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
+        if (y0 > y) != (y1 > y) and x < x0 + (y - y0) * (x1 - x0) / (y1 - y0):
+            inside = not inside
+    return inside
+
+
+def _check_enclosed(point: tuple[float, float], walls: tuple[Wall, ...], loc: _Loc) -> None:
+    """A ball centre lies inside the table's outline (when it has one)."""
+    outline = enclosure(walls)
+    if outline is not None and not _inside(point, outline.points):
+        loc.fail(f"({point[0]:g}, {point[1]:g}) is outside the table's outline {outline.name!r}")
+
+
 def check_ball_state(
     table: Table, position: object, velocity: object, source: str
 ) -> tuple[tuple[float, float], tuple[float, float]]:
     """Validate a ball state given at run time (e.g. reset options): ``position`` a finite [x, y]
-    in the playfield, clear of every wall, post and resting flipper; ``velocity`` a finite pair.
+    in the playfield and its outline, clear of every wall, post and resting flipper; ``velocity``
+    a finite pair no faster than MAX_BALL_SPEED.
     Errors name ``source``, e.g. ``reset options: ball_position: ...``."""
     where = _Loc(source)
     point = _point(position, where.key("ball_position"), table.width, table.height)
@@ -716,7 +768,8 @@ def check_ball_state(
         point, table.ball.radius, table.walls, table.posts, table.flippers,
         where.key("ball_position"),
     )  # fmt: skip
-    return point, _pair(velocity, where.key("ball_velocity"))
+    _check_enclosed(point, table.walls, where.key("ball_position"))
+    return point, _velocity(velocity, where.key("ball_velocity"))
 
 
 def _check_launch_path(plunger: Plunger, walls: tuple[Wall, ...], top: _Loc) -> None:

@@ -1,5 +1,6 @@
 """The Gymnasium environment Pinball-v0: API, checkers, determinism, options, rewards, errors."""
 
+import dataclasses
 import os
 import pickle
 import subprocess
@@ -16,13 +17,14 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 import pinball_env
 from pinball_env.demo import main as demo_main
 from pinball_env.heuristic import HeuristicPolicy
-from pinball_env.table import TableError
+from pinball_env.table import TableError, load_table
 
 ROOT = Path(__file__).resolve().parent.parent
 OBS_TYPES = ["state", "rgb", "grayscale"]
 
 # Run as a script in fresh processes, and exec'd in this one: the digest of a seeded rollout.
 ROLLOUT_SCRIPT = """
+import dataclasses
 import hashlib
 import gymnasium as gym
 import numpy as np
@@ -245,12 +247,30 @@ def test_reset_options_put_the_ball_where_asked():
         ({"ball_position": [0.2, 2.0]}, "outside the playfield"),
         ({"ball_position": [0.16, 0.72]}, "overlaps post 'bumper_left'"),
         ({"ball_position": [0.2]}, "pair"),
+        ({"ball_position": [0.03, 1.05]}, "outside the table's outline"),  # above the arch
+        ({"ball_velocity": [0.0, 150.0]}, "above 100 m/s"),
     ],
 )
 def test_bad_reset_options_are_rejected_clearly(options, message):
     env = gym.make("Pinball-v0")
+    env.reset(seed=0)
+    twin = gym.make("Pinball-v0")
+    twin.reset(seed=0)
     with pytest.raises(ValueError, match=message):
-        env.reset(seed=0, options=options)
+        env.reset(seed=1, options=options)
+    # A rejected reset changes nothing: the env plays on exactly as its twin.
+    for _ in range(20):
+        assert env.step(1)[0].tobytes() == twin.step(1)[0].tobytes()
+
+
+def test_reset_takes_the_ball_state_from_an_info():
+    env = gym.make("Pinball-v0")
+    _, info = env.reset(seed=0)
+    for _ in range(40):
+        _, _, _, _, info = env.step(0)
+    options = {"ball_position": info["ball_position"], "ball_velocity": info["ball_velocity"]}
+    _, again = env.reset(seed=0, options=options)
+    np.testing.assert_array_equal(again["ball_position"], info["ball_position"])
 
 
 # --- bad input -------------------------------------------------------------------------------
@@ -272,6 +292,11 @@ def test_multibinary_action_outside_the_space_is_an_error(action):
         env.step(action)
 
 
+def without_drain():
+    classic = load_table("classic")
+    return dataclasses.replace(classic, sensors=classic.sensors[:-1])
+
+
 @pytest.mark.parametrize(
     ("kwargs", "error", "message"),
     [
@@ -283,6 +308,7 @@ def test_multibinary_action_outside_the_space_is_an_error(action):
         ({"reward_scale": float("nan")}, ValueError, "reward_scale must be a finite"),
         ({"table": "box"}, ValueError, "has no plunger"),
         ({"physics": "box2d"}, ValueError, "physics must be one of"),
+        ({"table": without_drain()}, ValueError, "no drain sensor"),
     ],
 )
 @pytest.mark.filterwarnings("ignore:.*render_mode='ansi'")  # gymnasium's own warning first

@@ -542,6 +542,33 @@ GATE = "walls[2] 'gate'"
 
 # The same, as mutations of classic.yaml's dict: flippers, sensors, plunger and scores.
 BAD_CLASSIC_TABLES: dict[str, tuple[Mutation, str, str]] = {
+    # run-time sanity: the ball inside the outline, no absurd speeds or step counts
+    "ball start above the arch": (
+        _set("ball", "start", value=[0.03, 1.05]),
+        "ball.start",
+        "outside the table's outline 'outline'",
+    ),
+    "plunger outside the outline": (
+        _set("plunger", "position", value=[0.49, 1.05]),
+        "plunger.position",
+        "outside the table's outline",
+    ),
+    "ball too fast": (_set("ball", "velocity", value=[0.0, 150.0]), "ball.velocity", "above 100"),
+    "frame rate too low": (
+        _set("simulation", "frame_rate", value=0.5),
+        "simulation.frame_rate",
+        "out of range",
+    ),
+    "too many substeps": (
+        _set("simulation", "substeps", value=5000),
+        "simulation.substeps",
+        "out of range",
+    ),
+    "too many passes": (
+        _set("simulation", "max_passes", value=5000),
+        "simulation.max_passes",
+        "out of range",
+    ),
     # unknown and missing keys
     "unknown flipper key": (
         _set("flippers", 0, "kick", value=1.0),
