@@ -1,6 +1,7 @@
 """``PinballEnv``: the Gymnasium shell around the game rules and the swept-collision physics."""
 
 import math
+import numbers
 import os
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -78,7 +79,8 @@ class PinballEnv(gym.Env):
     The points of the step's scoring events times ``reward_scale`` (default 0.01): a pop bumper
     is 100 points (reward 1), a slingshot or a rollover 10 (0.1). Optional shaping, off by
     default: ``height_shaping`` times the rise of the ball during the step in table heights (a
-    potential, so it sums to ``height_shaping`` times the net rise of each ball).
+    potential, so it sums to ``height_shaping`` times the net rise of each ball, from its launch
+    to where it drains).
 
     ## Starting State
 
@@ -141,7 +143,8 @@ class PinballEnv(gym.Env):
         _check_choice("physics", physics, PHYSICS)
         _check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
         for name, value in (("reward_scale", reward_scale), ("height_shaping", height_shaping)):
-            if not isinstance(value, (int, float)) or not math.isfinite(value):
+            real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+            if not real or not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
         if isinstance(balls, bool) or not isinstance(balls, (int, np.integer)) or balls < 1:
             raise ValueError(f"balls must be an integer >= 1, got {balls!r}")
@@ -212,9 +215,10 @@ class PinballEnv(gym.Env):
         height_before = self.game.world.balls[0, 1]
         points, drained, game_over = self.game.step(buttons[None, :], [self.np_random])
         reward = float(points[0]) * self.reward_scale
-        if self.height_shaping and not drained[0]:
-            rise = (self.game.world.balls[0, 1] - height_before) / self.table.height
-            reward += self.height_shaping * rise
+        if self.height_shaping:
+            # A drained ball's last height is where it crossed the drain, not the next ball's.
+            height_after = self.game.drain_height[0] if drained[0] else self.game.world.balls[0, 1]
+            reward += self.height_shaping * (height_after - height_before) / self.table.height
         if self.render_mode == "human":
             self.render()
         info = self._info(points=int(points[0]), drained=bool(drained[0]))

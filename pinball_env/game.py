@@ -1,5 +1,6 @@
 """The rules of a pinball game over a batch of tables: balls per game, scoring, launches, drains,
-and the state observation. Shared by the single env (a batch of one) and the vector env.
+and the state observation. The single env is a batch of one; a vector env (to come) can
+run N with the same code.
 
 Everything here is vectorised over the env axis; the physics is the World's kernel.
 """
@@ -44,6 +45,8 @@ class Game:
         self.world = make_world(table, n_envs, physics)
         self.balls_left = np.zeros(n_envs, dtype=np.int64)
         self.score = np.zeros(n_envs, dtype=np.int64)
+        # Height [m] at which each env's last drained ball crossed the drain.
+        self.drain_height = np.zeros(n_envs)
         flippers = self.world.packed.flippers
         self._rest = flippers[:, FLIPPER_REST_ANGLE]
         # +1 for a flipper whose upstroke turns counter-clockwise, -1 for clockwise.
@@ -80,6 +83,7 @@ class Game:
         self.score += points
         drained = self.balls_left > 0
         drained &= ~self.world.state.active
+        self.drain_height[drained] = self.world.balls[drained, BALL_Y]
         self.balls_left -= drained
         for env in np.flatnonzero(drained & (self.balls_left > 0)):
             self.launch(env, rngs[env])

@@ -1,7 +1,8 @@
 """A batch of balls on one table: the state arrays and the call into the world-step kernel.
 
 ``World`` owns the preallocated arrays the kernel writes in place. The single env is a World of
-one, the vector env a World of N; both call :func:`pinball_env.physics.step_world`.
+one; a vector env (to come) is a World of N calling the same kernel,
+:func:`~pinball_env.physics.step_world`.
 """
 
 from dataclasses import dataclass
@@ -69,7 +70,7 @@ class World:
             sensor_drain=packed.sensor_drain,
         )
         sim = table.simulation
-        gravity_x, gravity_y = table.gravity_vector
+        gravity_x, gravity_y = packed.gravity
         self.settings = Settings(
             gravity_x=gravity_x,
             gravity_y=gravity_y,
@@ -141,9 +142,13 @@ class World:
                 None keeps the previous commands.
         """
         if buttons is not None:
-            self.state.flipper_command[:] = np.asarray(buttons, dtype=bool)[
-                :, self._flipper_buttons
-            ]
+            pressed = np.asarray(buttons)
+            if pressed.shape != (self.n_envs, 2) or not np.isin(pressed, (0, 1)).all():
+                raise ValueError(
+                    f"buttons must be ({self.n_envs}, 2) booleans (left, right per env), "
+                    f"got {pressed.tolist()!r}"
+                )
+            self.state.flipper_command[:] = pressed.astype(bool)[:, self._flipper_buttons]
         self._advance()
 
     def _advance(self) -> None:

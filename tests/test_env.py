@@ -445,3 +445,24 @@ def test_demo_module_runs_as_a_script(tmp_path):
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
     assert "game 1: score" in result.stdout
+
+
+def test_height_shaping_sums_to_the_net_rise_of_each_ball():
+    env = gym.make("Pinball-v0", reward_scale=0.0, height_shaping=1.0)
+    start = [0.2365, 0.3]
+    env.reset(seed=0, options={"ball_position": start, "ball_velocity": [0.0, 0.5]})
+    total = 0.0
+    for _ in range(600):
+        _, reward, _, _, info = env.step(0)
+        total += reward
+        if info["drained"]:
+            break
+    assert info["drained"]
+    drain_y = env.unwrapped.table.sensors[-1].points[0][1]
+    assert total == pytest.approx((drain_y - start[1]) / env.unwrapped.table.height, abs=1e-12)
+
+
+def test_reward_scale_accepts_numpy_numbers_and_rejects_bools():
+    assert gym.make("Pinball-v0", reward_scale=np.float32(0.5)).unwrapped.reward_scale == 0.5
+    with pytest.raises(ValueError, match="reward_scale must be a finite number"):
+        gym.make("Pinball-v0", reward_scale=True)

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics.layout import BALL_SPIN, BALL_VX, BALL_VY, BALL_X, BALL_Y
-from pinball_env.table import table_from_dict
+from pinball_env.table import load_table, table_from_dict
 from pinball_env.world import CONTACT_CAPACITY, World
 
 RADIUS = 0.0135
@@ -325,3 +325,10 @@ def test_same_input_gives_bitwise_same_output():
     (balls_a, contacts_a), (balls_b, contacts_b) = run(), run()
     assert balls_a.tobytes() == balls_b.tobytes()
     assert contacts_a.tobytes() == contacts_b.tobytes()
+
+
+@pytest.mark.parametrize("buttons", [[[True, False]], [[0.5, 0.0], [1, 0]], [[2, 0], [0, 0]]])
+def test_buttons_must_be_one_pair_of_booleans_per_env(buttons):
+    world = World(load_table("classic"), n_envs=2)
+    with pytest.raises(ValueError, match=r"buttons must be \(2, 2\) booleans"):
+        world.step(buttons)

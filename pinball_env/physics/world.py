@@ -1,15 +1,16 @@
 """The world step: advance a batch of balls (one per env) through the table by swept collision.
 
-Every state array has a leading env axis, so the single env is a batch of one and the vector env
-calls the very same kernel. Each frame of length ``dt`` is cut into fixed substeps. In a substep
-the flippers follow their commands (kinematic: a constant angular speed towards the stop the
-command selects), gravity updates the ball's velocity (semi-implicit Euler), then the ball sweeps
-along its straight path and stops at the earliest contact over all walls, posts and flippers
-(ties go to the lowest element id), responds, and sweeps the remaining time again. A pass cap and
-a minimum-progress rule end the loop for a wedged ball: the rest of that substep is dropped,
-never skipped over, so the ball can stall for an instant but cannot tunnel. Sensors (rollovers,
-the drain) are crossed, not collided with: a crossing of the ball's centre is an event, and a
-drain crossing takes the ball out of play.
+Every state array has a leading env axis, so the single env is a batch of one and a vector env
+(to come) calls the very same kernel. Each frame of length ``dt`` is cut into fixed substeps. In
+a substep the flippers follow their commands (kinematic: a constant angular speed towards the
+stop the command selects), gravity updates the ball's velocity (semi-implicit Euler), then the
+ball sweeps along its straight path and stops at the earliest contact over all walls, posts and
+flippers (ties go to the lowest element id), responds, and sweeps the remaining time again. A
+pass cap and a minimum-progress rule end the loop for a wedged ball: the rest of that substep is
+dropped, never skipped over, so the ball can stall for an instant but cannot tunnel; a flipper
+pushing a wedged ball stalls too, as a real coil does. Sensors (rollovers, the drain) are
+crossed, not collided with: a crossing of the ball's centre is an event, and a drain crossing
+takes the ball out of play.
 
 Contact response (per unit mass, relative to the velocity of the surface, zero except on a
 swinging flipper): the normal velocity is reflected with restitution ``e`` (``e = 0`` below
