@@ -327,7 +327,8 @@ def step_world(geometry, settings, state):
     stops = np.empty(n_flippers)
     angles = np.empty(n_flippers)
     pass_stops = np.empty(n_flippers)
-    crossings = np.empty(geometry.sensors.shape[0])
+    n_sensors = geometry.sensors.shape[0]
+    crossings = np.empty(n_sensors)
     balls = state.balls
     for i in range(balls.shape[0]):
         state.contact_count[i] = 0
@@ -351,16 +352,8 @@ def step_world(geometry, settings, state):
                 remaining = h
                 stalled = 0
                 pusher = -1  # the last flipper that pushed into the ball in this substep
-                for _ in range(settings.max_passes + 1):
+                for _ in range(settings.max_passes):
                     if remaining <= 0.0:
-                        break
-                    if _ == settings.max_passes or stalled >= MAX_STALLED_PASSES:
-                        # Wedged: the rest of the substep is dropped. A flipper pushing the
-                        # ball into something cannot crush it: like a real coil it stalls
-                        # there (a kinematic flipper would otherwise drive through the ball).
-                        if pusher >= 0:
-                            held = pusher
-                            held_time = h - remaining
                         break
                     elapsed = h - remaining
                     for j in range(n_flippers):
@@ -382,20 +375,26 @@ def step_world(geometry, settings, state):
                     move = min(t, 1.0)
                     # Sensors crossed on the way to the contact (or to the end of the substep).
                     used = remaining * move
-                    drain = cross_sensors(
-                        x, y, vx * used, vy * used, geometry.sensors, geometry.sensor_drain,
-                        crossings,
-                    )  # fmt: skip
-                    for j in range(geometry.sensors.shape[0]):
-                        if crossings[j] <= drain and crossings[j] < INF:
-                            state.hits[i, first_sensor + j] += 1
-                            time = k * h + elapsed + used * crossings[j]
-                            log_contact(state, i, first_sensor + j, time, 0.0)
-                    if drain < INF:
-                        x += vx * used * drain
-                        y += vy * used * drain
-                        state.active[i] = False
-                        break
+                    crossed = False  # the common case, checked first: no sensor crossed
+                    for j in range(n_sensors):
+                        if sensor_crossing(x, y, vx * used, vy * used, geometry.sensors[j]) < INF:
+                            crossed = True
+                            break
+                    if crossed:
+                        drain = cross_sensors(
+                            x, y, vx * used, vy * used, geometry.sensors, geometry.sensor_drain,
+                            crossings,
+                        )  # fmt: skip
+                        for j in range(n_sensors):
+                            if crossings[j] <= drain and crossings[j] < INF:
+                                state.hits[i, first_sensor + j] += 1
+                                time = k * h + elapsed + used * crossings[j]
+                                log_contact(state, i, first_sensor + j, time, 0.0)
+                        if drain < INF:
+                            x += vx * used * drain
+                            y += vy * used * drain
+                            state.active[i] = False
+                            break
                     x += vx * used
                     y += vy * used
                     remaining -= used
@@ -421,8 +420,17 @@ def step_world(geometry, settings, state):
                         pusher = element - n_segments - n_circles
                     if used <= MIN_PROGRESS * h:
                         stalled += 1
+                        if stalled >= MAX_STALLED_PASSES:
+                            break
                     else:
                         stalled = 0
+                if remaining > 0.0 and pusher >= 0 and state.active[i]:
+                    # Wedged (time left after the pass cap or the progress rule): the rest of
+                    # the substep is dropped. A flipper pushing the ball into something cannot
+                    # crush it: like a real coil it stalls there (a kinematic flipper would
+                    # otherwise drive through the ball).
+                    held = pusher
+                    held_time = h - remaining
             for j in range(n_flippers):
                 if j == held:
                     state.flipper_angle[i, j] = start_angles[j] + omegas[j] * min(
