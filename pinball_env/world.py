@@ -143,12 +143,13 @@ class World:
         """
         if buttons is not None:
             pressed = np.asarray(buttons)
-            if pressed.shape != (self.n_envs, 2) or not np.isin(pressed, (0, 1)).all():
+            binary = pressed.dtype == np.bool_ or np.all((pressed == 0) | (pressed == 1))
+            if pressed.shape != (self.n_envs, 2) or not binary:
                 raise ValueError(
                     f"buttons must be ({self.n_envs}, 2) booleans (left, right per env), "
                     f"got {pressed.tolist()!r}"
                 )
-            self.state.flipper_command[:] = pressed.astype(bool)[:, self._flipper_buttons]
+            self.state.flipper_command[:] = pressed[:, self._flipper_buttons]
         self._advance()
 
     def _advance(self) -> None:
