@@ -509,7 +509,7 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
             "frame_rate": partial(_number, low=1.0, high=1000.0),
             "substeps": partial(_number, low=1, high=1000, integer=True),
             "max_passes": partial(_number, low=1, high=1000, integer=True),
-            "skin": partial(_number, low=0.0, high=1e-3, open_low=True),
+            "skin": partial(_number, low=0.0, high=1e-4, open_low=True),
             "resting_speed": _non_negative,
         }
         options["simulation"] = _record(

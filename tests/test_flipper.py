@@ -372,7 +372,7 @@ def test_flipper_stalls_against_a_ball_wedged_under_a_lid():
         angle = world.state.flipper_angle[0, 0]
         if frame == 0:
             assert angle < free_swing - math.radians(10)  # held back by the wedged ball
-        assert world.balls[0, BALL_Y] <= lid - R  # never through the lid
+        assert world.balls[0, BALL_Y] <= lid - R + 1e-6  # never through the lid (skin scale)
         gap = flipper_distance(*world.balls[0, :2], 0.2, 0.3, L, RB, RT, angle)[0]
         assert gap >= R - 1e-6  # nor through the flipper
     for _ in range(6):

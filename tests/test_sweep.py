@@ -173,6 +173,14 @@ def test_one_sided_lets_a_ball_from_the_other_side_pass():
     assert_miss(sweep([1.3, -0.4], [-1.0, 1.0], one_sided=True))
 
 
+def test_one_sided_lets_a_ball_still_partly_through_fall_back():
+    # Centre just in front of the line but within r of it, moving back: like a ball that did
+    # not fully pass a one-way gate, it goes back through instead of being shoved forward.
+    assert_miss(sweep([0.0, 0.2], [0.0, -1.0], one_sided=True))
+    # Wholly in front and touching: a contact, as for a two-sided segment.
+    assert_hit(sweep([0.0, R], [0.0, -1.0], one_sided=True), 0.0, [0.0, 1.0])
+
+
 def test_one_sided_orientation_follows_the_point_order():
     # Reversing the points flips the normal to -y: now the ball from below is stopped.
     assert_hit(sweep([0.0, -2.0], [0.0, 4.0], B, A, one_sided=True), 1.5 / 4.0, [0.0, -1.0])

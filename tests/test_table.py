@@ -476,8 +476,12 @@ BAD_TABLES: dict[str, tuple[Mutation, str, str]] = {
     "frame_rate": (_set("simulation", "frame_rate", value=0), "simulation.frame_rate", "range"),
     "substeps": (_set("simulation", "substeps", value=0), "simulation.substeps", "out of range"),
     "max_passes": (_set("simulation", "max_passes", value=0), "simulation.max_passes", "range"),
-    "skin zero": (_set("simulation", "skin", value=0.0), "simulation.skin", "(must be (0, 0.001])"),
-    "skin large": (_set("simulation", "skin", value=2e-3), "simulation.skin", "out of range"),
+    "skin zero": (
+        _set("simulation", "skin", value=0.0),
+        "simulation.skin",
+        "(must be (0, 0.0001])",
+    ),
+    "skin large": (_set("simulation", "skin", value=2e-4), "simulation.skin", "out of range"),
     "resting_speed": (
         _set("simulation", "resting_speed", value=-0.1),
         "simulation.resting_speed",

@@ -332,3 +332,17 @@ def test_buttons_must_be_one_pair_of_booleans_per_env(buttons):
     world = World(load_table("classic"), n_envs=2)
     with pytest.raises(ValueError, match=r"buttons must be \(2, 2\) booleans"):
         world.step(buttons)
+
+
+def test_ball_partly_through_a_gate_next_to_a_wall_goes_back_instead_of_into_the_wall():
+    # A one-way gate (blocking from the left, where its normal points) 20 mm from the box's
+    # left wall: too close for the ball to get wholly past it. A ball from the right pushes
+    # half through, meets the wall, and must come back out the way it came, never into the wall.
+    gate = {"points": [[0.03, 0.2], [0.03, 0.8]], "extra": {"one_sided": True}}
+    box = {"points": BOX, "extra": {"closed": True}}
+    world = make_world([box, gate], start=(0.1, 0.5), slope_deg=0.0, restitution=0.5)
+    world.place_ball(0, (0.1, 0.5), (-1.0, 0.0))
+    for _ in range(60):
+        world.step()
+        assert world.balls[0, BALL_X] >= 0.01 + RADIUS - SKIN
+    assert world.balls[0, BALL_VX] > 0.0 and world.balls[0, BALL_X] > 0.03 + RADIUS

@@ -16,8 +16,8 @@ Cases handled, in order (see shared/design/physics.md):
    ball starts on, accepted only if the contact point projects inside the segment.
 3. Ends: otherwise the ball may hit an end point, a ray against a circle of radius r around each
    end; the earlier wins. Faces plus ends make a ray-capsule test (Ericson, RTCD 5.3.2, 5.5.7).
-4. One-sided segments collide only with a ball whose centre starts on the side of the normal
-   n = rot+90(P1 - P0); a ball from the other side passes untouched.
+4. One-sided segments collide only with a ball that starts wholly on the side of the normal
+   n = rot+90(P1 - P0); a ball from the other side, or still partly through, passes untouched.
 """
 
 import math
@@ -26,6 +26,9 @@ import numpy as np
 from numba import njit
 
 INF = math.inf
+# A one-sided segment stops only a ball whose centre starts at least this share of its radius in
+# front of it (a resting ball, r + skin away, is well clear of the margin).
+ONE_SIDED_CLEARANCE = 1.0 - 1e-6
 
 
 @njit(cache=True)
@@ -95,8 +98,10 @@ def sweep_segment(cx, cy, dx, dy, r, x0, y0, x1, y1, one_sided):
     nx = -uy
     ny = ux
     d0 = nx * (cx - x0) + ny * (cy - y0)  # signed distance of the centre from the line
-    if one_sided and d0 < 0.0:
-        return INF, 0.0, 0.0  # behind a one-sided segment: passes untouched
+    if one_sided and d0 < ONE_SIDED_CLEARANCE * r:
+        # Behind a one-sided segment, or still partly through it (a ball that has not fully
+        # passed a one-way gate falls back through it, as past a flap): passes untouched.
+        return INF, 0.0, 0.0
 
     # 1. Start overlap, from the closest point of the segment.
     along = ux * (cx - x0) + uy * (cy - y0)
@@ -167,7 +172,8 @@ def sweep_circle_segment(
         radius: ball radius (> 0).
         p0, p1: segment end points, shape (2,). Equal points behave as a single point.
         one_sided: if true the segment stops only a ball coming from the side of its normal
-            ``rot+90(p1 - p0)`` (counter-clockwise); a ball from the other side passes.
+            ``rot+90(p1 - p0)`` (counter-clockwise); a ball from the other side, or one still
+            partly through it, passes.
 
     Returns:
         ``(t, normal)``: ``t`` in [0, 1] is the fraction of the displacement at first contact and

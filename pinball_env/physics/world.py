@@ -329,6 +329,8 @@ def step_world(geometry, settings, state):
     pass_stops = np.empty(n_flippers)
     n_sensors = geometry.sensors.shape[0]
     crossings = np.empty(n_sensors)
+    held = np.zeros(n_flippers, dtype=np.bool_)  # flippers stopped for the rest of a substep
+    hit_elements = np.empty(settings.max_passes, dtype=np.int64)  # hits of one substep
     balls = state.balls
     for i in range(balls.shape[0]):
         state.contact_count[i] = 0
@@ -344,14 +346,15 @@ def step_world(geometry, settings, state):
                 targets[j], omegas[j], stops[j] = flipper_motion(
                     geometry.flippers[j], start_angles[j], state.flipper_command[i, j]
                 )
-            held = -1  # a flipper stopped by a ball wedged against it, and since when
-            held_time = 0.0
+            held[:] = False
+            held_time = h
             if state.active[i]:
                 vx += settings.gravity_x * h
                 vy += settings.gravity_y * h
                 remaining = h
                 stalled = 0
                 pusher = -1  # the last flipper that pushed into the ball in this substep
+                n_hits = 0
                 for _ in range(settings.max_passes):
                     if remaining <= 0.0:
                         break
@@ -415,7 +418,8 @@ def step_world(geometry, settings, state):
                     y += ny * push
                     log_contact(state, i, element, k * h + h - remaining, speed)
                     if speed >= settings.resting_speed or props[PROP_KICK] > 0.0:
-                        state.hits[i, element] += 1
+                        hit_elements[n_hits] = element
+                        n_hits += 1
                     if element >= n_segments + n_circles and svx * nx + svy * ny > 0.0:
                         pusher = element - n_segments - n_circles
                     if used <= MIN_PROGRESS * h:
@@ -424,15 +428,30 @@ def step_world(geometry, settings, state):
                             break
                     else:
                         stalled = 0
-                if remaining > 0.0 and pusher >= 0 and state.active[i]:
+                pinched = False
+                if remaining > 0.0 and state.active[i]:
                     # Wedged (time left after the pass cap or the progress rule): the rest of
-                    # the substep is dropped. A flipper pushing the ball into something cannot
-                    # crush it: like a real coil it stalls there (a kinematic flipper would
-                    # otherwise drive through the ball).
-                    held = pusher
+                    # the substep is dropped for the ball, and so for every moving flipper that
+                    # could reach it, which would otherwise sweep through it unchecked. A
+                    # flipper pushing a wedged ball thus stalls against it, as a real coil does;
+                    # the pinched ball is at rest, and its pinch is no hit.
                     held_time = h - remaining
+                    for j in range(n_flippers):
+                        f = geometry.flippers[j]
+                        reach = max(
+                            f[FLIPPER_BASE_RADIUS], f[FLIPPER_LENGTH] + f[FLIPPER_TIP_RADIUS]
+                        )
+                        near = norm(x - f[FLIPPER_PIVOT_X], y - f[FLIPPER_PIVOT_Y]) <= reach + r
+                        held[j] = near and omegas[j] != 0.0 and stops[j] > held_time
+                    if pusher >= 0 and held[pusher]:
+                        pinched = True
+                        vx = 0.0
+                        vy = 0.0
+                if not pinched:
+                    for n in range(n_hits):
+                        state.hits[i, hit_elements[n]] += 1
             for j in range(n_flippers):
-                if j == held:
+                if held[j]:
                     state.flipper_angle[i, j] = start_angles[j] + omegas[j] * min(
                         held_time, stops[j]
                     )
