@@ -17,7 +17,7 @@ import numbers
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import MISSING, dataclass, fields
-from functools import partial
+from functools import cached_property, partial
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -26,6 +26,7 @@ import yaml
 
 from pinball_env.physics import layout
 from pinball_env.physics.flipper import flipper_distance
+from pinball_env.reachable import cell_of, free_space
 
 TABLES_DIR = Path(__file__).resolve().parent.parent / "configs" / "tables"
 # Fastest ball a table or a reset may set [m/s]: a real one rarely passes 10 m/s, and the flipper
@@ -206,6 +207,18 @@ class Table:
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
     source: str = "<dict>"  # file the table was read from
+
+    @cached_property
+    def free_space(self) -> np.ndarray:
+        """Grid of where a ball centre can get to from the plunger (or the ball's start), see
+        :mod:`pinball_env.reachable`; computed on first use."""
+        packed = self.pack()
+        start = self.plunger.position if self.plunger is not None else self.ball.start
+        two_sided = packed.segments[~packed.segment_one_sided]
+        return free_space(
+            self.width, self.height, self.ball.radius, two_sided, packed.circles,
+            packed.flippers, start,
+        )  # fmt: skip
 
     @property
     def gravity_vector(self) -> tuple[float, float]:
@@ -759,8 +772,8 @@ def check_ball_state(
     table: Table, position: object, velocity: object, source: str
 ) -> tuple[tuple[float, float], tuple[float, float]]:
     """Validate a ball state given at run time (e.g. reset options): ``position`` a finite [x, y]
-    in the playfield and its outline, clear of every wall, post and resting flipper; ``velocity``
-    a finite pair no faster than MAX_BALL_SPEED.
+    in the playfield and its outline, clear of every wall, post and resting flipper, and where a
+    ball from the plunger can get to; ``velocity`` a finite pair no faster than MAX_BALL_SPEED.
     Errors name ``source``, e.g. ``reset options: ball_position: ...``."""
     where = _Loc(source)
     point = _point(position, where.key("ball_position"), table.width, table.height)
@@ -769,6 +782,11 @@ def check_ball_state(
         where.key("ball_position"),
     )  # fmt: skip
     _check_enclosed(point, table.walls, where.key("ball_position"))
+    if not table.free_space[cell_of(point, table.free_space.shape)]:
+        where.key("ball_position").fail(
+            f"({point[0]:g}, {point[1]:g}) cannot be reached from the plunger: it is walled off "
+            "(inside a slingshot, say)"
+        )
     return point, _velocity(velocity, where.key("ball_velocity"))
 
 

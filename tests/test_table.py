@@ -876,3 +876,19 @@ def test_missing_file(tmp_path: Path) -> None:
     path = tmp_path / "missing.yaml"
     with pytest.raises(TableError, match=r"missing\.yaml: table file not found"):
         load_table(path)
+
+
+def test_free_space_reaches_every_lane_but_not_inside_a_slingshot() -> None:
+    from pinball_env.reachable import cell_of
+
+    table = load_table("classic")
+    grid = table.free_space
+
+    def reachable(x: float, y: float) -> bool:
+        return bool(grid[cell_of((x, y), grid.shape)])
+
+    for lane in [(0.02, 0.3), (0.06, 0.3), (0.413, 0.3), (0.45, 0.3), (0.4865, 0.5)]:
+        assert reachable(*lane), lane  # outlanes, inlanes, the shooter lane
+    assert reachable(0.2365, 0.06)  # below the flippers, above the drain
+    assert not reachable(0.0964, 0.2585)  # inside the left slingshot's triangle
+    assert not reachable(0.3766, 0.2585)  # and the right one
