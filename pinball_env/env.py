@@ -1,7 +1,5 @@
 """``PinballEnv``: the Gymnasium shell around the game rules and the swept-collision physics."""
 
-import math
-import numbers
 import os
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -10,14 +8,11 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pinball_env.backends import PHYSICS
-from pinball_env.game import DISCRETE_BUTTONS, Game
+from pinball_env.game import DISCRETE_BUTTONS, Game, check_choice
 from pinball_env.render import Renderer, Window, render_size
-from pinball_env.table import Table, check_ball_state, load_table
+from pinball_env.table import BUTTONS, Table, load_table
 
 OBS_TYPES = ("state", "rgb", "grayscale")
-ACTION_TYPES = ("discrete", "multibinary")
-RESET_OPTIONS = ("ball_position", "ball_velocity")
 
 
 class PinballEnv(gym.Env):
@@ -138,33 +133,26 @@ class PinballEnv(gym.Env):
         physics: str = "swept",
         render_mode: str | None = None,
     ) -> None:
-        _check_choice("obs_type", obs_type, OBS_TYPES)
-        _check_choice("action_type", action_type, ACTION_TYPES)
-        _check_choice("physics", physics, PHYSICS)
-        _check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
-        for name, value in (("reward_scale", reward_scale), ("height_shaping", height_shaping)):
-            real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
-            if not real or not math.isfinite(value):
-                raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if isinstance(balls, bool) or not isinstance(balls, (int, np.integer)) or balls < 1:
-            raise ValueError(f"balls must be an integer >= 1, got {balls!r}")
+        check_choice("obs_type", obs_type, OBS_TYPES)
+        check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
         if len(image_size) != 2 or min(image_size) < 16:
             raise ValueError(f"image_size must be (height, width), each >= 16, got {image_size}")
-
         self.table = table if isinstance(table, Table) else load_table(table)
+        self.game = Game(
+            self.table, n_envs=1, balls_per_game=balls, action_type=action_type,
+            reward_scale=reward_scale, height_shaping=height_shaping, physics=physics,
+        )  # fmt: skip
         self.obs_type = obs_type
         self.action_type = action_type
-        self.reward_scale = float(reward_scale)
-        self.height_shaping = float(height_shaping)
+        self.reward_scale = self.game.reward_scale
+        self.height_shaping = self.game.height_shaping
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.table.simulation.frame_rate}
-        self.physics = physics
-        self.game = Game(self.table, n_envs=1, balls=int(balls), physics=physics)
 
         if action_type == "discrete":
             self.action_space = spaces.Discrete(len(DISCRETE_BUTTONS))
         else:
-            self.action_space = spaces.MultiBinary(2)
+            self.action_space = spaces.MultiBinary(len(BUTTONS))
         self.image_size = (int(image_size[0]), int(image_size[1]))
         if obs_type == "state":
             low, high = self.game.observation_bounds()
@@ -185,44 +173,20 @@ class PinballEnv(gym.Env):
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        options = dict(options or {})
-        unknown = sorted(set(options) - set(RESET_OPTIONS))
-        if unknown:
-            raise ValueError(
-                f"unknown reset option(s) {', '.join(map(repr, unknown))} "
-                f"(allowed: {', '.join(RESET_OPTIONS)})"
-            )
-        if options:  # checked before anything changes: a rejected reset leaves the env as it was
-            position = options.get("ball_position", self.table.plunger.position)
-            velocity = options.get("ball_velocity", (0.0, 0.0))
-            position, velocity = check_ball_state(self.table, position, velocity, "reset options")
-        self.game.new_game(0, self.np_random)
-        if options:
-            self.game.world.place_ball(0, position, velocity)
+        self.game.new_game(0, self.np_random, options)
         if self.render_mode == "human":
             self.render()
-        return self._observe(), self._info(points=0, drained=False)
+        return self._observe(), self.game.info(0)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if not self.action_space.contains(action):
             raise ValueError(
                 f"invalid action {action!r}: expected an element of {self.action_space}"
             )
-        if self.action_type == "discrete":
-            buttons = DISCRETE_BUTTONS[int(action)]
-        else:
-            buttons = np.asarray(action, dtype=bool)
-        height_before = self.game.world.balls[0, 1]
-        points, drained, game_over = self.game.step(buttons[None, :], [self.np_random])
-        reward = float(points[0]) * self.reward_scale
-        if self.height_shaping:
-            # A drained ball's last height is where it crossed the drain, not the next ball's.
-            height_after = self.game.drain_height[0] if drained[0] else self.game.world.balls[0, 1]
-            reward += self.height_shaping * (height_after - height_before) / self.table.height
+        reward, game_over = self.game.step(np.asarray(action)[None], [self.np_random])
         if self.render_mode == "human":
             self.render()
-        info = self._info(points=int(points[0]), drained=bool(drained[0]))
-        return self._observe(), reward, bool(game_over[0]), False, info
+        return self._observe(), float(reward[0]), bool(game_over[0]), False, self.game.info(0)
 
     def render(self) -> np.ndarray | None:
         if self.render_mode is None:
@@ -265,18 +229,3 @@ class PinballEnv(gym.Env):
         if self.obs_type == "rgb":
             return self._obs_renderer.frame(*self._moving_parts())
         return self._obs_renderer.grayscale(*self._moving_parts())
-
-    def _info(self, points: int, drained: bool) -> dict[str, Any]:
-        return {
-            **self.game.ball_info(0),
-            "score": int(self.game.score[0]),
-            "balls_left": int(self.game.balls_left[0]),
-            "events": self.game.events(0),
-            "points": points,
-            "drained": drained,
-        }
-
-
-def _check_choice(name: str, value: object, choices: tuple[object, ...]) -> None:
-    if value not in choices:
-        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")

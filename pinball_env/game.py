@@ -1,102 +1,226 @@
-"""The rules of a pinball game over a batch of tables: balls per game, scoring, launches, drains,
-and the state observation. The single env is a batch of one; a vector env (to come) can
-run N with the same code.
+"""The rules of pinball over a batch of envs: actions to buttons, balls per game, launches, drains,
+score, reward, the state observation and the per-step info.
 
-Everything here is vectorised over the env axis; the physics is the World's kernel.
+Everything is vectorised over the env axis, so the single env (a Game of one) and the vector env
+(a Game of N) run the same code; the physics is the World's kernel. Everything that changes
+during play is in one record, :class:`GameState`, so that a game can be snapshotted and restored
+as one object.
 """
+
+import math
+import numbers
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from pinball_env.backends import make_world
-from pinball_env.physics.layout import BALL_VX, BALL_VY, BALL_X, BALL_Y, FLIPPER_REST_ANGLE
-from pinball_env.table import Table, enclosure
-from pinball_env.world import LEFT, RIGHT
+from pinball_env.physics import State
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, FLIPPER_REST_ANGLE
+from pinball_env.table import BUTTONS, Table, check_ball_state
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
 # real ball rarely exceeds 10 m/s on a table (a full flip at the tip gives about 5 m/s).
 MAX_OBS_SPEED = 20.0
 
-# Discrete actions -> (left button, right button).
-DISCRETE_BUTTONS = np.array([[False, False], [True, False], [False, True], [True, True]])
+ACTION_TYPES = ("discrete", "multibinary")
+# A discrete action is the buttons held as bits: bit i is button BUTTONS[i] (0 none, 1 left,
+# 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's buttons.
+DISCRETE_BUTTONS = (np.arange(2 ** len(BUTTONS))[:, None] >> np.arange(len(BUTTONS))) & 1 == 1
+RESET_OPTIONS = ("ball_position", "ball_velocity")
+
+
+def discrete_action(buttons: Sequence[bool]) -> int:
+    """The discrete action that holds ``buttons`` (one bool per entry of ``BUTTONS``)."""
+    return sum(int(bool(held)) << i for i, held in enumerate(buttons))
+
+
+class GameState(NamedTuple):
+    """Everything that changes during play, for every env (the first axis)."""
+
+    world: State  # the kernel's arrays: balls, flippers, contacts, hits
+    balls_left: np.ndarray  # (N,) int64: balls still to play, the one in play included
+    score: np.ndarray  # (N,) int64: points scored in the current game
+    drain_height: np.ndarray  # (N,) float64: where the last drained ball crossed the drain [m]
+    points: np.ndarray  # (N,) int64: points of the last step
+    drained: np.ndarray  # (N,) bool: a ball drained in the last step
 
 
 class Game:
-    """``n_envs`` games on one table.
+    """``n_envs`` games on one table, each of ``balls_per_game`` balls.
+
+    Args:
+        table: a validated table with a plunger, flippers, an outline and a drain.
+        n_envs: games played side by side.
+        balls_per_game: balls per game (>= 1).
+        action_type: ``"discrete"`` (0-3, the buttons as bits) or ``"multibinary"`` (a bool per
+            button).
+        reward_scale: reward per point.
+        height_shaping: weight of the height shaping term (0 = off): the rise of the ball
+            during the step, in table heights.
+        physics: the World backend, ``"swept"`` or ``"pymunk"``.
 
     Attributes:
-        world: the physics (balls, flippers) of every env.
-        balls_left: (n_envs,) balls still to play, the one in play included.
-        score: (n_envs,) points scored in the current game.
+        world: the physics of every env.
+        state: the :class:`GameState` (``state.world`` is ``world.state``).
     """
 
-    def __init__(self, table: Table, n_envs: int, balls: int, physics: str = "swept") -> None:
-        if table.plunger is None:
-            raise ValueError(f"table {table.name!r} has no plunger: a game needs one to launch")
-        if not table.flippers:
-            raise ValueError(f"table {table.name!r} has no flippers: there is nothing to play")
-        if enclosure(table.walls) is None:
-            raise ValueError(f"table {table.name!r} has no closed outline wall to keep the ball in")
-        if not any(sensor.drain for sensor in table.sensors):
-            raise ValueError(f"table {table.name!r} has no drain sensor: a game could never end")
-        if balls < 1:
-            raise ValueError(f"balls must be >= 1, got {balls}")
+    def __init__(
+        self,
+        table: Table,
+        n_envs: int = 1,
+        balls_per_game: int = 3,
+        action_type: str = "discrete",
+        reward_scale: float = 0.01,
+        height_shaping: float = 0.0,
+        physics: str = "swept",
+    ) -> None:
+        check_playable(table)
+        check_choice("action_type", action_type, ACTION_TYPES)
+        for name, value in (("reward_scale", reward_scale), ("height_shaping", height_shaping)):
+            real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+            if not real or not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
+        if not _is_int(balls_per_game) or balls_per_game < 1:
+            raise ValueError(f"balls must be an integer >= 1, got {balls_per_game!r}")
         self.table = table
-        self.balls = balls
+        self.balls_per_game = int(balls_per_game)
+        self.action_type = action_type
+        self.reward_scale = float(reward_scale)
+        self.height_shaping = float(height_shaping)
         self.world = make_world(table, n_envs, physics)
-        self.balls_left = np.zeros(n_envs, dtype=np.int64)
-        self.score = np.zeros(n_envs, dtype=np.int64)
-        # Height [m] at which each env's last drained ball crossed the drain.
-        self.drain_height = np.zeros(n_envs)
-        flippers = self.world.packed.flippers
-        self._rest = flippers[:, FLIPPER_REST_ANGLE]
-        # +1 for a flipper whose upstroke turns counter-clockwise, -1 for clockwise.
+        self.state = GameState(
+            world=self.world.state,
+            balls_left=np.zeros(n_envs, dtype=np.int64),
+            score=np.zeros(n_envs, dtype=np.int64),
+            drain_height=np.zeros(n_envs),
+            points=np.zeros(n_envs, dtype=np.int64),
+            drained=np.zeros(n_envs, dtype=bool),
+        )
+        rest = self.world.geometry.flippers[:, FLIPPER_REST_ANGLE]
         up = np.radians([f.up_angle for f in table.flippers])
-        self._up_sign = np.sign(up - self._rest)
-        self._swing = np.abs(up - self._rest)
+        self._rest = rest
+        self._up_sign = np.sign(up - rest)  # +1 for an upstroke counter-clockwise, -1 clockwise
+        self._swing = np.abs(up - rest)
         self._max_omega = np.array([max(f.up_speed, f.down_speed) for f in table.flippers])
-        self._scoring = np.flatnonzero(self.world.packed.element_scores)
+        self._scoring = np.flatnonzero(table.element_scores)
 
     @property
     def n_envs(self) -> int:
         return self.world.n_envs
 
-    def new_game(self, env: int, rng: np.random.Generator) -> None:
-        """Start a new game in env ``env``: flippers at rest, score 0, the first ball launched."""
+    @property
+    def balls_left(self) -> np.ndarray:
+        return self.state.balls_left
+
+    @property
+    def score(self) -> np.ndarray:
+        return self.state.score
+
+    # --- state --------------------------------------------------------------------------------
+
+    def snapshot(self) -> GameState:
+        """A copy of the whole game state of every env."""
+        return _copy(self.state)
+
+    def restore(self, snapshot: GameState) -> None:
+        """Put every env back to ``snapshot`` (from :meth:`snapshot` of a Game on the same table
+        with as many envs)."""
+        _copy_into(snapshot, self.state)
+
+    # --- playing ------------------------------------------------------------------------------
+
+    def new_game(
+        self, env: int, rng: np.random.Generator, options: Mapping[str, Any] | None = None
+    ) -> None:
+        """Start a new game in env ``env``: flippers at rest, score 0, the first ball launched.
+
+        ``options`` may hold ``ball_position`` [m] and ``ball_velocity`` [m/s] to put the ball
+        in play at that state instead; they are checked before anything changes, so a rejected
+        reset leaves the env as it was.
+        """
+        options = dict(options or {})
+        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        if unknown:
+            raise ValueError(
+                f"unknown reset option(s) {', '.join(map(repr, unknown))} "
+                f"(allowed: {', '.join(RESET_OPTIONS)})"
+            )
+        if options:
+            position = options.get("ball_position", self.table.plunger.position)
+            velocity = options.get("ball_velocity", (0.0, 0.0))
+            position, velocity = check_ball_state(self.table, position, velocity, "reset options")
         self.world.rest_flippers(env)
-        self.balls_left[env] = self.balls
-        self.score[env] = 0
+        state = self.state
+        state.balls_left[env] = self.balls_per_game
+        state.score[env] = 0
+        state.points[env] = 0
+        state.drained[env] = False
         self.launch(env, rng)
+        if options:
+            self.world.place_ball(env, position, velocity)
 
     def launch(self, env: int, rng: np.random.Generator) -> None:
         """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range."""
         low, high = self.table.plunger.speed
         self.world.launch(env, float(rng.uniform(low, high)))
 
-    def step(self, buttons: np.ndarray, rngs: list[np.random.Generator]) -> tuple[np.ndarray, ...]:
-        """One frame with the given (n_envs, 2) buttons. A drained ball is replaced by the next
-        one off the plunger; the game ends when the last ball drains.
+    def buttons(self, actions: Any) -> np.ndarray:
+        """The (n_envs, len(BUTTONS)) bool buttons held by ``actions``: (n_envs,) integers for
+        ``"discrete"``, (n_envs, len(BUTTONS)) zeros and ones for ``"multibinary"``."""
+        actions = np.asarray(actions)
+        if self.action_type == "discrete":
+            valid = (
+                actions.shape == (self.n_envs,)
+                and actions.dtype.kind in "iu"
+                and actions.min() >= 0
+                and actions.max() < len(DISCRETE_BUTTONS)
+            )
+            if valid:
+                return DISCRETE_BUTTONS[actions]
+            expected = f"({self.n_envs},) integers in [0, {len(DISCRETE_BUTTONS)})"
+        else:
+            shape = (self.n_envs, len(BUTTONS))
+            if actions.shape == shape and np.all((actions == 0) | (actions == 1)):
+                return actions.astype(bool)
+            expected = f"{shape} zeros and ones"
+        raise ValueError(
+            f"invalid actions: expected {expected} for action_type={self.action_type!r}, "
+            f"got shape {actions.shape} dtype {actions.dtype}"
+        )
 
-        Returns ``(points, drained, game_over)``, each (n_envs,).
+    def step(
+        self, actions: Any, rngs: Sequence[np.random.Generator]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One frame of every env with ``actions`` (see :meth:`buttons`). A drained ball is
+        replaced by the next one off the plunger (drawn from the env's ``rngs`` entry); the game
+        ends when the last ball drains.
+
+        Returns ``(reward, game_over)``, (n_envs,) float64 and bool. The step's points and
+        drains are in :attr:`state`.
         """
+        buttons = self.buttons(actions)
+        state, balls = self.state, self.world.balls
+        height_before = balls[:, BALL_Y].copy()
         self.world.step(buttons)
         points = self.world.frame_points()
-        self.score += points
-        drained = self.balls_left > 0
-        drained &= ~self.world.state.active
-        self.drain_height[drained] = self.world.balls[drained, BALL_Y]
-        self.balls_left -= drained
-        for env in np.flatnonzero(drained & (self.balls_left > 0)):
+        state.score[:] += points
+        drained = state.balls_left > 0
+        drained &= ~self.world.active
+        state.drain_height[drained] = balls[drained, BALL_Y]
+        state.balls_left[:] -= drained
+        for env in np.flatnonzero(drained & (state.balls_left > 0)):
             self.launch(env, rngs[env])
-        game_over = self.balls_left == 0
-        return points, drained, game_over
+        state.points[:] = points
+        state.drained[:] = drained
+        reward = points * self.reward_scale
+        if self.height_shaping:
+            # A drained ball's last height is where it crossed the drain, not the next ball's.
+            height_after = np.where(drained, state.drain_height, balls[:, BALL_Y])
+            reward += self.height_shaping * (height_after - height_before) / self.table.height
+        return reward, state.balls_left == 0
 
-    def events(self, env: int) -> dict[str, int]:
-        """The scoring elements env ``env`` hit in the last frame: name -> hits."""
-        hits = self.world.state.hits[env]
-        names = self.world.packed.element_names
-        return {names[i]: int(hits[i]) for i in self._scoring if hits[i]}
-
-    # --- the state observation -------------------------------------------------------------
+    # --- what the agent sees ------------------------------------------------------------------
 
     def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds of :meth:`observe` (float32, one entry per feature)."""
@@ -107,31 +231,103 @@ class Game:
         )  # fmt: skip
         high = np.concatenate(
             [[self.table.width, self.table.height, MAX_OBS_SPEED, MAX_OBS_SPEED], self._swing,
-             self._max_omega, [1.0, float(self.balls)]]
+             self._max_omega, [1.0, float(self.balls_per_game)]]
         )  # fmt: skip
         return low.astype(np.float32), high.astype(np.float32)
 
     def observe(self) -> np.ndarray:
         """(n_envs, 4 + 2F + 2) float32: ball x, y, vx, vy; each flipper's angle above rest and
         angular velocity towards up; ball in play; balls left. See PinballEnv's docstring."""
-        state = self.world.state
-        balls = state.balls
-        lift = (state.flipper_angle - self._rest) * self._up_sign  # the kernel stops it exactly
+        world = self.world.state
+        balls = world.balls
+        lift = (world.flipper_angle - self._rest) * self._up_sign  # the kernel stops it exactly
         velocity = np.clip(balls[:, [BALL_VX, BALL_VY]], -MAX_OBS_SPEED, MAX_OBS_SPEED)
         obs = np.concatenate(
-            [balls[:, [BALL_X, BALL_Y]], velocity, lift, state.flipper_omega * self._up_sign,
-             state.active[:, None], self.balls_left[:, None]],
+            [balls[:, [BALL_X, BALL_Y]], velocity, lift, world.flipper_omega * self._up_sign,
+             world.active[:, None], self.state.balls_left[:, None]],
             axis=1,
         )  # fmt: skip
         return obs.astype(np.float32)
 
-    def ball_info(self, env: int) -> dict[str, np.ndarray]:
-        """Ball position [m] and velocity [m/s] of env ``env`` in table coordinates."""
-        ball = self.world.state.balls[env]
+    def events(self, env: int) -> dict[str, int]:
+        """The scoring elements env ``env`` hit in the last step: name -> hits."""
+        hits = self.world.state.hits[env]
+        names = self.table.element_names
+        return {names[i]: int(hits[i]) for i in self._scoring if hits[i]}
+
+    def infos(self) -> dict[str, np.ndarray]:
+        """The per-step info of every env as arrays (first axis the env): ``ball_position`` [m],
+        ``ball_velocity`` [m/s], ``score``, ``balls_left``, ``points`` (this step) and
+        ``drained`` (a ball drained this step)."""
+        state, balls = self.state, self.world.balls
         return {
-            "ball_position": ball[[BALL_X, BALL_Y]].copy(),
-            "ball_velocity": ball[[BALL_VX, BALL_VY]].copy(),
+            "ball_position": balls[:, [BALL_X, BALL_Y]],
+            "ball_velocity": balls[:, [BALL_VX, BALL_VY]],
+            "score": state.score.copy(),
+            "balls_left": state.balls_left.copy(),
+            "points": state.points.copy(),
+            "drained": state.drained.copy(),
+        }
+
+    def info(self, env: int) -> dict[str, Any]:
+        """The per-step info of env ``env``: that of :meth:`infos` as Python numbers (the ball's
+        position and velocity as float64 arrays), plus ``events`` (:meth:`events`)."""
+        state, ball = self.state, self.world.balls[env]
+        return {
+            "ball_position": ball[[BALL_X, BALL_Y]],
+            "ball_velocity": ball[[BALL_VX, BALL_VY]],
+            "score": int(state.score[env]),
+            "balls_left": int(state.balls_left[env]),
+            "events": self.events(env),
+            "points": int(state.points[env]),
+            "drained": bool(state.drained[env]),
         }
 
 
-__all__ = ["DISCRETE_BUTTONS", "LEFT", "MAX_OBS_SPEED", "RIGHT", "Game"]
+def check_playable(table: Table) -> None:
+    """A game needs a plunger to launch, flippers to play, an outline and a drain to end it."""
+    if table.plunger is None:
+        raise ValueError(f"table {table.name!r} has no plunger: a game needs one to launch")
+    if not table.flippers:
+        raise ValueError(f"table {table.name!r} has no flippers: there is nothing to play")
+    if table.outline is None:
+        raise ValueError(f"table {table.name!r} has no closed outline wall to keep the ball in")
+    if not any(sensor.drain for sensor in table.sensors):
+        raise ValueError(f"table {table.name!r} has no drain sensor: a game could never end")
+
+
+def check_choice(name: str, value: object, choices: Sequence[object]) -> None:
+    """Raise a ValueError naming ``name`` unless ``value`` is one of ``choices``."""
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _copy(record: tuple) -> Any:
+    """A deep copy of a record of arrays (and nested records)."""
+    return type(record)(*(_copy(v) if isinstance(v, tuple) else v.copy() for v in record))
+
+
+def _copy_into(source: tuple, target: tuple) -> None:
+    """Copy every array of record ``source`` into the same array of record ``target``."""
+    for src, dst in zip(source, target, strict=True):
+        if isinstance(dst, tuple):
+            _copy_into(src, dst)
+        else:
+            np.copyto(dst, src)
+
+
+__all__ = [
+    "ACTION_TYPES",
+    "DISCRETE_BUTTONS",
+    "MAX_OBS_SPEED",
+    "RESET_OPTIONS",
+    "Game",
+    "GameState",
+    "check_choice",
+    "check_playable",
+    "discrete_action",
+]

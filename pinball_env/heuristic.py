@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env.table import Table
-from pinball_env.world import LEFT, RIGHT
+from pinball_env.game import discrete_action
+from pinball_env.table import BUTTONS, Table
 
 
 class HeuristicPolicy:
@@ -40,8 +40,9 @@ class HeuristicPolicy:
         self._hold[:] = 0
 
     def buttons(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
-        """(left, right) buttons for a ball at ``position`` [m] moving at ``velocity`` [m/s]."""
-        pressed = np.zeros(2, dtype=bool)
+        """The buttons (one per entry of ``BUTTONS``) for a ball at ``position`` [m] moving at
+        ``velocity`` [m/s]."""
+        pressed = np.zeros(len(BUTTONS), dtype=bool)
         r = self.table.ball.radius
         for j, flipper in enumerate(self.table.flippers):
             rest = math.radians(flipper.rest_angle)
@@ -55,12 +56,12 @@ class HeuristicPolicy:
                 self._hold[j] = self.hold_frames
             if self._hold[j] > 0:
                 self._hold[j] -= 1
-                pressed[LEFT if flipper.button == "left" else RIGHT] = True
+                pressed[flipper.button_index] = True
         return pressed
 
     def __call__(self, info: Mapping[str, Any]) -> int | np.ndarray:
         """The action for the env state described by ``info`` (from reset or step)."""
-        left, right = self.buttons(info["ball_position"], info["ball_velocity"])
+        pressed = self.buttons(info["ball_position"], info["ball_velocity"])
         if self.action_type == "multibinary":
-            return np.array([left, right], dtype=np.int8)
-        return int(left) + 2 * int(right)
+            return pressed.astype(np.int8)
+        return discrete_action(pressed)

@@ -1,35 +1,27 @@
-"""A batch of balls on one table: the state arrays and the call into the world-step kernel.
+"""A batch of balls on one table: the kernel's arrays and the call into the world step.
 
-``World`` owns the preallocated arrays the kernel writes in place. The single env is a World of
-one; a vector env (to come) is a World of N calling the same kernel,
-:func:`~pinball_env.physics.step_world`.
+``World`` owns the preallocated arrays the kernel writes in place (built by
+:func:`~pinball_env.physics.make_state` and :func:`~pinball_env.physics.make_scratch` from the
+packed table). The single env is a World of one; the vector env is a World of N calling the same
+kernel, :func:`~pinball_env.physics.step_world`. Physics backends swap :meth:`World._advance`.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from pinball_env.physics import Geometry, Settings, State, step_world
-from pinball_env.physics.layout import (
-    BALL_STATE_SIZE,
+from pinball_env.physics import CONTACT_CAPACITY, make_scratch, make_state, step_world
+from pinball_env.physics.columns import (
     BALL_VX,
     BALL_VY,
     BALL_X,
     BALL_Y,
     CONTACT_ELEMENT,
-    CONTACT_SIZE,
     CONTACT_SPEED,
     CONTACT_TIME,
     FLIPPER_REST_ANGLE,
 )
-from pinball_env.physics.world import segment_bounds
-from pinball_env.table import Table
-
-# Contacts logged per env and frame; more are counted but not logged. A frame of a ball
-# rattling in a corner makes a few dozen; the cap bounds memory, not physics.
-CONTACT_CAPACITY = 64
-# Flipper buttons, the columns of the ``buttons`` argument of :meth:`World.step`.
-LEFT, RIGHT = 0, 1
+from pinball_env.table import BUTTONS, Table
 
 
 @dataclass(frozen=True)
@@ -43,60 +35,32 @@ class Contact:
 
 
 class World:
-    """``n_envs`` independent games on the same table, stepped together.
+    """``n_envs`` independent balls and flipper sets on the same table, stepped together.
 
     Attributes:
+        table: the validated table.
+        geometry, settings: the table as the kernel sees it (``table.pack()``,
+            ``table.pack_settings()``).
         state: the kernel's per-env arrays (``physics.State``): balls, active, flipper angles
             and angular velocities, flipper commands, the contact log and the hit counts.
-        geometry, settings: the table as the kernel sees it.
+        scratch: the kernel's per-env work arrays.
     """
 
     def __init__(self, table: Table, n_envs: int = 1) -> None:
-        if n_envs < 1:
-            raise ValueError(f"n_envs must be >= 1, got {n_envs}")
         self.table = table
-        self.packed = packed = table.pack()
-        self.n_envs = n_envs
-        self.geometry = Geometry(
-            segments=packed.segments,
-            segment_bounds=segment_bounds(packed.segments),
-            segment_props=packed.segment_props,
-            segment_one_sided=packed.segment_one_sided,
-            circles=packed.circles,
-            circle_props=packed.circle_props,
-            flippers=packed.flippers,
-            flipper_props=packed.flipper_props,
-            sensors=packed.sensors,
-            sensor_drain=packed.sensor_drain,
-        )
-        sim = table.simulation
-        gravity_x, gravity_y = packed.gravity
-        self.settings = Settings(
-            gravity_x=gravity_x,
-            gravity_y=gravity_y,
-            radius=table.ball.radius,
-            dt=1.0 / sim.frame_rate,
-            substeps=sim.substeps,
-            max_passes=sim.max_passes,
-            skin=sim.skin,
-            resting_speed=sim.resting_speed,
-        )
-        n_flippers = packed.flippers.shape[0]
-        self.state = State(
-            balls=np.zeros((n_envs, BALL_STATE_SIZE)),
-            active=np.zeros(n_envs, dtype=bool),
-            flipper_angle=np.zeros((n_envs, n_flippers)),
-            flipper_omega=np.zeros((n_envs, n_flippers)),
-            flipper_command=np.zeros((n_envs, n_flippers), dtype=bool),
-            contacts=np.zeros((n_envs, CONTACT_CAPACITY, CONTACT_SIZE)),
-            contact_count=np.zeros(n_envs, dtype=np.int64),
-            hits=np.zeros((n_envs, len(packed.element_names)), dtype=np.int64),
-        )
+        self.geometry = table.pack()
+        self.settings = table.pack_settings()
+        self.state = make_state(self.geometry, n_envs)
+        self.scratch = make_scratch(self.geometry, self.settings, n_envs)
         # Column of the buttons array that drives each flipper.
-        self._flipper_buttons = np.array(packed.flipper_buttons, dtype=np.int64)
+        self._flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
         for env in range(n_envs):
             self.rest_flippers(env)
             self.place_ball(env, table.ball.start, table.ball.velocity)
+
+    @property
+    def n_envs(self) -> int:
+        return self.state.balls.shape[0]
 
     # Shorthands for the arrays used most.
     @property
@@ -107,18 +71,14 @@ class World:
     def active(self) -> np.ndarray:
         return self.state.active
 
-    @property
-    def dt(self) -> float:
-        return self.settings.dt
-
     def place_ball(
         self, env: int, position: tuple[float, float], velocity: tuple[float, float] = (0.0, 0.0)
     ) -> None:
         """Put env ``env``'s ball in play at ``position`` [m] with ``velocity`` [m/s], no spin."""
-        state = self.state.balls[env]
-        state[:] = 0.0
-        state[BALL_X], state[BALL_Y] = position
-        state[BALL_VX], state[BALL_VY] = velocity
+        ball = self.state.balls[env]
+        ball[:] = 0.0
+        ball[BALL_X], ball[BALL_Y] = position
+        ball[BALL_VX], ball[BALL_VY] = velocity
         self.state.active[env] = True
 
     def launch(self, env: int, speed: float) -> None:
@@ -130,7 +90,7 @@ class World:
 
     def rest_flippers(self, env: int) -> None:
         """Put env ``env``'s flippers at rest against their lower stops, released."""
-        self.state.flipper_angle[env] = self.packed.flippers[:, FLIPPER_REST_ANGLE]
+        self.state.flipper_angle[env] = self.geometry.flippers[:, FLIPPER_REST_ANGLE]
         self.state.flipper_omega[env] = 0.0
         self.state.flipper_command[env] = False
 
@@ -138,35 +98,38 @@ class World:
         """Advance every env by one frame.
 
         Args:
-            buttons: (n_envs, 2) bool, the left and right flipper buttons held during the frame;
-                None keeps the previous commands.
+            buttons: (n_envs, len(BUTTONS)) bool, the flipper buttons (left, right) held during
+                the frame; None keeps the previous commands.
         """
         if buttons is not None:
             pressed = np.asarray(buttons)
-            binary = pressed.dtype == np.bool_ or np.all((pressed == 0) | (pressed == 1))
-            if pressed.shape != (self.n_envs, 2) or not binary:
+            shape = (self.n_envs, len(BUTTONS))
+            if pressed.shape != shape:
                 raise ValueError(
-                    f"buttons must be ({self.n_envs}, 2) booleans (left, right per env), "
-                    f"got {pressed.tolist()!r}"
+                    f"buttons must have shape {shape} ({', '.join(BUTTONS)} per env), "
+                    f"got shape {pressed.shape}"
                 )
+            if pressed.dtype != np.bool_ and not np.all((pressed == 0) | (pressed == 1)):
+                raise ValueError(f"buttons must be booleans or 0/1, got dtype {pressed.dtype}")
             self.state.flipper_command[:] = pressed[:, self._flipper_buttons]
         self._advance()
 
     def _advance(self) -> None:
         """One frame of physics on the state arrays: the swept-collision kernel."""
-        step_world(self.geometry, self.settings, self.state)
+        step_world(self.geometry, self.settings, self.state, self.scratch)
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""
-        return self.state.hits @ self.packed.element_scores
+        return self.state.hits @ self.table.element_scores
 
     def frame_contacts(self, env: int = 0) -> list[Contact]:
         """The logged contacts and sensor crossings of env ``env`` in the last frame."""
         count = min(int(self.state.contact_count[env]), CONTACT_CAPACITY)
+        names = self.table.element_names
         return [
             Contact(
                 element=int(row[CONTACT_ELEMENT]),
-                name=self.packed.element_names[int(row[CONTACT_ELEMENT])],
+                name=names[int(row[CONTACT_ELEMENT])],
                 time=float(row[CONTACT_TIME]),
                 speed=float(row[CONTACT_SPEED]),
             )
@@ -180,3 +143,6 @@ class World:
             self.step(buttons)
             path[frame] = self.state.balls[env, [BALL_X, BALL_Y]]
         return path
+
+
+__all__ = ["CONTACT_CAPACITY", "Contact", "World"]

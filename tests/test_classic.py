@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from pinball_env.backends import make_world
+from pinball_env.physics.columns import BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
-from pinball_env.physics.layout import BALL_VY, BALL_X, BALL_Y
-from pinball_env.physics.world import sensor_crossing
+from pinball_env.physics.step import sensor_crossing
 from pinball_env.table import load_table, table_from_dict
 from pinball_env.world import World
 
@@ -18,7 +18,7 @@ NONE = np.array([[False, False]])
 
 
 def element_id(world, name):
-    return world.packed.element_names.index(name)
+    return world.table.element_names.index(name)
 
 
 def run_until(world, condition, frames=600, buttons=NONE):
@@ -128,12 +128,12 @@ def inside(points, polygon):
 def solid_gaps(world, points):
     """Smallest distance from each point to any two-sided wall, post surface and flipper
     (a ball passes through a one-sided gate from behind)."""
-    seg = np.asarray(world.packed.segments)[~world.packed.segment_one_sided]
+    seg = np.asarray(world.geometry.segments)[~world.geometry.segment_one_sided]
     a, e = seg[None, :, :2], seg[None, :, 2:] - seg[None, :, :2]
     p = points[:, None, :]
     s = np.clip(((p - a) * e).sum(-1) / (e**2).sum(-1), 0.0, 1.0)
     gaps = np.linalg.norm(a + s[..., None] * e - p, axis=-1).min(axis=1)
-    circles = np.asarray(world.packed.circles)
+    circles = np.asarray(world.geometry.circles)
     post_gaps = np.linalg.norm(p - circles[None, :, :2], axis=-1) - circles[None, :, 2]
     gaps = np.minimum(gaps, post_gaps.min(axis=1))
     for env, (x, y) in enumerate(points):

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from pinball_env import crosscheck as cc
+from pinball_env.tools import crosscheck as cc
 
 
 @pytest.mark.parametrize("engine", cc.ENGINES)

@@ -15,9 +15,9 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import pinball_env
-from pinball_env.demo import main as demo_main
 from pinball_env.heuristic import HeuristicPolicy
-from pinball_env.table import TableError, load_table
+from pinball_env.table import TableError, builtin_tables_dir, load_table
+from pinball_env.tools.demo import main as demo_main
 
 ROOT = Path(__file__).resolve().parent.parent
 OBS_TYPES = ["state", "rgb", "grayscale"]
@@ -66,7 +66,7 @@ def test_registration_and_time_limit():
 
 
 def test_table_by_name_or_yaml_path():
-    by_path = gym.make("Pinball-v0", table=str(ROOT / "configs" / "tables" / "classic.yaml"))
+    by_path = gym.make("Pinball-v0", table=str(builtin_tables_dir() / "classic.yaml"))
     by_name = gym.make("Pinball-v0", table="classic")
     assert by_path.unwrapped.table.walls == by_name.unwrapped.table.walls
     assert by_path.reset(seed=1)[0].tobytes() == by_name.reset(seed=1)[0].tobytes()
@@ -440,7 +440,7 @@ def test_demo_plays_headless_and_writes_a_snapshot(tmp_path):
 def test_demo_module_runs_as_a_script(tmp_path):
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
     result = subprocess.run(
-        [sys.executable, "-m", "pinball_env.demo", "--max-steps", "120", "--snapshot",
+        [sys.executable, "-m", "pinball_env.tools.demo", "--max-steps", "120", "--snapshot",
          str(tmp_path / "demo.png")],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=300,
     )  # fmt: skip

@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics import capsule_distance, respond, sweep_capsule, sweep_flipper
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
-from pinball_env.physics.layout import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.table import load_table, table_from_dict
 from pinball_env.world import World
 

@@ -12,9 +12,8 @@ import numpy as np
 import pytest
 import yaml
 
-from pinball_env.physics import layout
+from pinball_env.physics import columns
 from pinball_env.table import (
-    TABLES_DIR,
     Ball,
     Flipper,
     Plunger,
@@ -24,14 +23,14 @@ from pinball_env.table import (
     Table,
     TableError,
     Wall,
-    _flipper_distance,
     available_tables,
+    builtin_tables_dir,
     load_table,
     table_from_dict,
 )
 
-BOX = TABLES_DIR / "box.yaml"
-CLASSIC = TABLES_DIR / "classic.yaml"
+BOX = builtin_tables_dir() / "box.yaml"
+CLASSIC = builtin_tables_dir() / "classic.yaml"
 
 
 def box_dict() -> dict[str, Any]:
@@ -83,27 +82,27 @@ def test_packed_arrays() -> None:
     n_circles = len(table.posts)
     expected = {
         "segments": ((n_segments, 4), np.float64),
-        "segment_props": ((n_segments, layout.PROP_SIZE), np.float64),
+        "segment_props": ((n_segments, columns.PROP_SIZE), np.float64),
         "segment_one_sided": ((n_segments,), np.bool_),
         "circles": ((n_circles, 3), np.float64),
-        "circle_props": ((n_circles, layout.PROP_SIZE), np.float64),
-        "gravity": ((2,), np.float64),
+        "circle_props": ((n_circles, columns.PROP_SIZE), np.float64),
+        "segment_bounds": ((n_segments, 3), np.float64),
         # box.yaml has no flippers and no sensors: empty arrays of the right shape
-        "flippers": ((0, layout.FLIPPER_SIZE), np.float64),
-        "flipper_props": ((0, layout.PROP_SIZE), np.float64),
+        "flippers": ((0, columns.FLIPPER_SIZE), np.float64),
+        "flipper_props": ((0, columns.PROP_SIZE), np.float64),
         "sensors": ((0, 4), np.float64),
         "sensor_drain": ((0,), np.bool_),
-        "element_scores": ((n_segments + n_circles,), np.int64),
     }
     _check_arrays(packed, expected)
-    assert packed.flipper_buttons == ()
-    assert not packed.element_scores.any()
+    _check_arrays(table, {"element_scores": ((n_segments + n_circles,), np.int64)})
+    assert table.flipper_buttons == ()
+    assert not table.element_scores.any()
     assert table.plunger is None
     with pytest.raises(ValueError, match="read-only"):
         packed.segments[0, 0] = 1.0
-    assert len(packed.element_names) == n_segments + n_circles
-    assert packed.element_names[:4] == ("outline[0]", "outline[1]", "outline[2]", "outline[3]")
-    assert packed.element_names[-2:] == ("post_left", "post_right")
+    assert len(table.element_names) == n_segments + n_circles
+    assert table.element_names[:4] == ("outline[0]", "outline[1]", "outline[2]", "outline[3]")
+    assert table.element_names[-2:] == ("post_left", "post_right")
 
 
 def test_packed_values() -> None:
@@ -111,19 +110,20 @@ def test_packed_values() -> None:
     # Gate: the last segment, one-sided, wall material.
     np.testing.assert_array_equal(packed.segments[-1], [0.36, 0.80, 0.46, 0.80])
     assert packed.segment_one_sided.tolist() == [False] * 6 + [True]
-    assert packed.segment_props[-1, layout.PROP_RESTITUTION] == 0.3
-    assert packed.segment_props[-1, layout.PROP_FRICTION] == 0.3
-    assert packed.segment_props[-1, layout.PROP_KICK] == 0.0
+    assert packed.segment_props[-1, columns.PROP_RESTITUTION] == 0.3
+    assert packed.segment_props[-1, columns.PROP_FRICTION] == 0.3
+    assert packed.segment_props[-1, columns.PROP_KICK] == 0.0
     np.testing.assert_array_equal(packed.circles[0], [0.20, 0.60, 0.01])
-    assert packed.circle_props[0, layout.PROP_RESTITUTION] == 0.85
-    assert packed.circle_props[0, layout.PROP_FRICTION] == 0.5
+    assert packed.circle_props[0, columns.PROP_RESTITUTION] == 0.85
+    assert packed.circle_props[0, columns.PROP_FRICTION] == 0.5
 
 
 def test_gravity_vector() -> None:
     table = load_table("box")
     expected = -9.81 * math.sin(math.radians(6.5))
     assert table.gravity_vector == pytest.approx((0.0, expected), rel=1e-15)
-    np.testing.assert_allclose(table.pack().gravity, [0.0, expected], rtol=1e-15)
+    settings = table.pack_settings()
+    assert (settings.gravity_x, settings.gravity_y) == table.gravity_vector
 
 
 def test_wall_segments_closing_segment() -> None:
@@ -140,23 +140,24 @@ def test_kick_is_packed() -> None:
     data["walls"][1]["kick"] = 1.5
     data["posts"][0]["kick"] = 2.5
     packed = table_from_dict(data).pack()
-    assert packed.segment_props[4, layout.PROP_KICK] == 1.5
-    assert packed.circle_props[0, layout.PROP_KICK] == 2.5
+    assert packed.segment_props[4, columns.PROP_KICK] == 1.5
+    assert packed.circle_props[0, columns.PROP_KICK] == 2.5
 
 
 def test_empty_table_packs_to_empty_arrays() -> None:
     data = box_dict()
     del data["walls"], data["posts"]
-    packed = table_from_dict(data).pack()
+    table = table_from_dict(data)
+    packed = table.pack()
     assert packed.segments.shape == (0, 4)
-    assert packed.segment_props.shape == (0, layout.PROP_SIZE)
+    assert packed.segment_props.shape == (0, columns.PROP_SIZE)
     assert packed.segment_one_sided.shape == (0,)
     assert packed.circles.shape == (0, 3)
-    assert packed.circle_props.shape == (0, layout.PROP_SIZE)
-    assert packed.element_names == ()
-    assert packed.flippers.shape == (0, layout.FLIPPER_SIZE)
+    assert packed.circle_props.shape == (0, columns.PROP_SIZE)
+    assert table.element_names == ()
+    assert packed.flippers.shape == (0, columns.FLIPPER_SIZE)
     assert packed.sensors.shape == (0, 4)
-    assert packed.element_scores.shape == (0,)
+    assert table.element_scores.shape == (0,)
 
 
 def test_defaults_come_from_the_dataclasses() -> None:
@@ -249,38 +250,39 @@ def test_classic_packed_arrays() -> None:
     _check_arrays(
         packed,
         {
-            "flippers": ((2, layout.FLIPPER_SIZE), np.float64),
-            "flipper_props": ((2, layout.PROP_SIZE), np.float64),
+            "flippers": ((2, columns.FLIPPER_SIZE), np.float64),
+            "flipper_props": ((2, columns.PROP_SIZE), np.float64),
             "sensors": ((5, 4), np.float64),
             "sensor_drain": ((5,), np.bool_),
-            "element_scores": ((n_elements,), np.int64),
         },
     )
-    assert len(packed.element_names) == n_elements
+    _check_arrays(table, {"element_scores": ((n_elements,), np.int64)})
+    assert len(table.element_names) == n_elements
 
 
 def test_packed_flippers() -> None:
-    packed = load_table("classic").pack()
+    table = load_table("classic")
+    packed = table.pack()
     up_speed = math.radians(50) / 0.022
     down_speed = math.radians(50) / 0.04
     expected = {
-        layout.FLIPPER_PIVOT_X: (0.146, 0.327),
-        layout.FLIPPER_PIVOT_Y: (0.12, 0.12),
-        layout.FLIPPER_LENGTH: (0.07, 0.07),
-        layout.FLIPPER_BASE_RADIUS: (0.0116, 0.0116),
-        layout.FLIPPER_TIP_RADIUS: (0.007, 0.007),
-        layout.FLIPPER_REST_ANGLE: (math.radians(-25), math.radians(205)),
-        layout.FLIPPER_UP_ANGLE: (math.radians(25), math.radians(155)),
-        layout.FLIPPER_UP_SPEED: (up_speed, up_speed),
-        layout.FLIPPER_DOWN_SPEED: (down_speed, down_speed),
+        columns.FLIPPER_PIVOT_X: (0.146, 0.327),
+        columns.FLIPPER_PIVOT_Y: (0.12, 0.12),
+        columns.FLIPPER_LENGTH: (0.07, 0.07),
+        columns.FLIPPER_BASE_RADIUS: (0.0116, 0.0116),
+        columns.FLIPPER_TIP_RADIUS: (0.007, 0.007),
+        columns.FLIPPER_REST_ANGLE: (math.radians(-25), math.radians(205)),
+        columns.FLIPPER_UP_ANGLE: (math.radians(25), math.radians(155)),
+        columns.FLIPPER_UP_SPEED: (up_speed, up_speed),
+        columns.FLIPPER_DOWN_SPEED: (down_speed, down_speed),
     }
-    assert sorted(expected) == list(range(layout.FLIPPER_SIZE))
+    assert sorted(expected) == list(range(columns.FLIPPER_SIZE))
     for column, values in expected.items():
         np.testing.assert_allclose(packed.flippers[:, column], values, rtol=1e-15)
-    assert packed.flipper_buttons == (0, 1)
-    np.testing.assert_array_equal(packed.flipper_props[:, layout.PROP_RESTITUTION], [0.8, 0.8])
-    np.testing.assert_array_equal(packed.flipper_props[:, layout.PROP_FRICTION], [0.4, 0.4])
-    np.testing.assert_array_equal(packed.flipper_props[:, layout.PROP_KICK], [0.0, 0.0])
+    assert table.flipper_buttons == (0, 1)
+    np.testing.assert_array_equal(packed.flipper_props[:, columns.PROP_RESTITUTION], [0.8, 0.8])
+    np.testing.assert_array_equal(packed.flipper_props[:, columns.PROP_FRICTION], [0.4, 0.4])
+    np.testing.assert_array_equal(packed.flipper_props[:, columns.PROP_KICK], [0.0, 0.0])
 
 
 def test_packed_sensors() -> None:
@@ -291,9 +293,8 @@ def test_packed_sensors() -> None:
 
 def test_element_ids_and_scores() -> None:
     table = load_table("classic")
-    packed = table.pack()
     n_segments = sum(len(w.segments()) for w in table.walls)
-    names = packed.element_names
+    names = table.element_names
     # Segments, then circles, flippers and sensors, each in file order.
     assert names[0] == "outline[0]"
     assert names[n_segments - 1] == "right_slingshot[0]"
@@ -311,7 +312,7 @@ def test_element_ids_and_scores() -> None:
         "right_outlane",
         "drain",
     )
-    scores = dict(zip(names, packed.element_scores.tolist(), strict=True))
+    scores = dict(zip(names, table.element_scores.tolist(), strict=True))
     assert {name: score for name, score in scores.items() if score} == {
         "left_slingshot[0]": 10,
         "right_slingshot[0]": 10,
@@ -330,14 +331,13 @@ def test_scores_default_to_zero_and_every_segment_of_a_wall_scores() -> None:
     assert Post(name="p", center=(0.0, 0.0), radius=0.1, material="m").score == 0
     data = box_dict()
     data["walls"][0]["score"] = 5
-    packed = table_from_dict(data).pack()
-    assert packed.element_scores.tolist() == [5, 5, 5, 5, 0, 0, 0, 0, 0]
+    assert table_from_dict(data).element_scores.tolist() == [5, 5, 5, 5, 0, 0, 0, 0, 0]
 
 
 def test_flipper_buttons_follow_the_file() -> None:
     data = classic_dict()
     data["flippers"][0]["button"] = "right"
-    assert table_from_dict(data).pack().flipper_buttons == (1, 1)
+    assert table_from_dict(data).flipper_buttons == (1, 1)
 
 
 def test_flipper_distance_matches_the_hull_of_its_circles() -> None:
@@ -352,9 +352,7 @@ def test_flipper_distance_matches_the_hull_of_its_circles() -> None:
     for x, y in rng.uniform((0.20, 0.04), (0.40, 0.20), size=(200, 2)):
         brute = np.min(np.hypot(x - cx, y - cy) - radius)
         if brute > 0.0:  # outside; inside, the union's depth is not the capsule's signed distance
-            assert _flipper_distance((x, y), flipper, flipper.rest_angle) == pytest.approx(
-                brute, abs=1e-7
-            )
+            assert flipper.distance((x, y), flipper.rest_angle) == pytest.approx(brute, abs=1e-7)
 
 
 def test_plunger_is_optional() -> None:
@@ -879,7 +877,7 @@ def test_missing_file(tmp_path: Path) -> None:
 
 
 def test_free_space_reaches_every_lane_but_not_inside_a_slingshot() -> None:
-    from pinball_env.reachable import cell_of
+    from pinball_env.table.reachable import cell_of
 
     table = load_table("classic")
     grid = table.free_space

@@ -2,7 +2,7 @@
 
 import json
 
-from pinball_env import benchmark, draw
+from pinball_env.tools import benchmark, plot
 
 
 def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
@@ -18,5 +18,5 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
 
 def test_draw_renders_tables_and_traces(tmp_path):
     for table in ("classic", "box"):
-        out = draw.main([table, "--out", str(tmp_path / f"{table}.png"), "--trace", "30"])
+        out = plot.main([table, "--out", str(tmp_path / f"{table}.png"), "--trace", "30"])
         assert out.stat().st_size > 10_000

@@ -9,13 +9,15 @@ instead of the swept kernel: one ``pymunk.Space`` per env, built from the same v
   spin matches ours;
 - flippers are kinematic bodies made of the base circle, the tip circle and the quadrilateral
   between their tangent points, driven by exactly the same angle schedule as the kernel's
-  (the same :func:`~pinball_env.physics.world.flipper_motion`): in each substep the body turns at
+  (the kernel's own :func:`~pinball_env.physics.step.flipper_motion` and
+  :func:`~pinball_env.physics.step.flipper_end`): in each substep the body turns at
   the angular velocity that takes it from the kernel's start angle to its end angle;
 - materials map to ``elasticity`` (restitution) and ``friction``: the ball's own are 1, and
   pymunk multiplies the two shapes' values; kickers add their kick along the contact normal once
-  per new contact;
+  per new contact, and what counts as a hit is the kernel's rule (``is_hit``);
 - gravity, frame rate and substeps are the table's; sensors and the drain are the kernel's own
-  crossing test on the ball centre's path over each substep.
+  crossing test and bookkeeping (``record_crossings``) on the ball centre's path over each
+  substep.
 
 What pymunk does not have, and the cross-check measures: continuous collision (it finds overlaps
 after they happen, so a fast ball can pass through a thin wall or a flipper within one substep),
@@ -31,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env.physics.layout import (
+from pinball_env.physics import capsule_face_normal, first_flipper
+from pinball_env.physics.columns import (
     BALL_SPIN,
     BALL_VX,
     BALL_VY,
@@ -41,7 +44,13 @@ from pinball_env.physics.layout import (
     PROP_KICK,
     PROP_RESTITUTION,
 )
-from pinball_env.physics.world import cross_sensors, flipper_motion, log_contact
+from pinball_env.physics.step import (
+    flipper_end,
+    flipper_motion,
+    is_hit,
+    log_contact,
+    record_crossings,
+)
 from pinball_env.table import Table
 from pinball_env.world import World
 
@@ -85,8 +94,7 @@ class _EnvSpace:
     def __init__(self, world: PymunkWorld, env: int) -> None:
         self.world = world
         self.env = env
-        table = world.table
-        packed = world.packed
+        table, geometry = world.table, world.geometry
         space = pymunk.Space()
         space.gravity = table.gravity_vector
         space.collision_slop = COLLISION_SLOP
@@ -94,20 +102,17 @@ class _EnvSpace:
         self.space = space
         self.time = 0.0  # seconds since the start of the frame, for the contact log
         self.pending_kicks: list[tuple[float, float, float]] = []
-        self.crossings = np.empty(len(world.packed.sensors))
 
         static = space.static_body
-        for element, (x0, y0, x1, y1) in enumerate(packed.segments):
+        for element, (x0, y0, x1, y1) in enumerate(geometry.segments):
             shape = pymunk.Segment(static, (x0, y0), (x1, y1), 0.0)
-            self._add_element(shape, element, packed.segment_props[element])
-            shape.one_sided = bool(packed.segment_one_sided[element])
+            self._add_element(shape, element, geometry.segment_props[element])
+            shape.one_sided = bool(geometry.segment_one_sided[element])
             shape.blocking_normal = (-(y1 - y0), x1 - x0)  # rot+90(P1 - P0)
             shape.anchor = (x0, y0)
-        offset = len(packed.segments)
-        for j, (x, y, radius) in enumerate(packed.circles):
+        for j, (x, y, radius) in enumerate(geometry.circles):
             shape = pymunk.Circle(static, radius, offset=(x, y))
-            self._add_element(shape, offset + j, packed.circle_props[j])
-        offset += len(packed.circles)
+            self._add_element(shape, len(geometry.segments) + j, geometry.circle_props[j])
         self.flipper_bodies = []
         for j, flipper in enumerate(table.flippers):
             body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
@@ -115,7 +120,7 @@ class _EnvSpace:
             space.add(body)
             for shape in _flipper_shapes(body, flipper.length, flipper.base_radius,
                                          flipper.tip_radius):  # fmt: skip
-                self._add_element(shape, offset + j, packed.flipper_props[j])
+                self._add_element(shape, first_flipper(geometry) + j, geometry.flipper_props[j])
             self.flipper_bodies.append(body)
 
         mass = table.ball.mass
@@ -166,7 +171,7 @@ class _EnvSpace:
         speed = max(-((vx - surface.x) * nx + (vy - surface.y) * ny), 0.0)
         state = self.world.state
         log_contact(state, self.env, other.element, self.time, speed)
-        if speed >= self.world.settings.resting_speed or other.kick > 0.0:
+        if is_hit(speed, other.kick, self.world.settings.resting_speed):
             state.hits[self.env, other.element] += 1
         if other.kick > 0.0:
             self.pending_kicks.append((other.kick, nx, ny))
@@ -175,50 +180,49 @@ class _EnvSpace:
 
     def advance_frame(self) -> None:
         world, env = self.world, self.env
-        state, settings = world.state, world.settings
+        state, settings, geometry = world.state, world.settings, world.geometry
         h = settings.dt / settings.substeps
         state.contact_count[env] = 0
         state.hits[env, :] = 0
         self._sync_ball_in()
-        flippers = world.packed.flippers
-        first_sensor = len(world.packed.element_names) - len(world.packed.sensors)
+        angle, omega = state.flipper_angle[env], state.flipper_omega[env]
+        flippers, commands = geometry.flippers, state.flipper_command[env]
         for k in range(settings.substeps):
             self.time = k * h
+            # The kernel's flipper schedule, never held (pymunk has no wedge rule).
             for j, body in enumerate(self.flipper_bodies):
-                start = state.flipper_angle[env, j]
-                target, omega, stop = flipper_motion(
-                    flippers[j], start, state.flipper_command[env, j]
-                )
-                end = target if stop <= h else start + omega * h
+                start = angle[j]
+                target, turn, stop = flipper_motion(flippers[j], start, commands[j])
+                angle[j], omega[j] = flipper_end(start, target, turn, stop, False, h, h)
                 body.angle = start
-                body.angular_velocity = (end - start) / h
-                state.flipper_angle[env, j] = end
-                state.flipper_omega[env, j] = 0.0 if stop <= h else omega
+                body.angular_velocity = (angle[j] - start) / h
             before = self.ball.position
             space_before = self.ball_in_space
             self.space.step(h)
             for j, body in enumerate(self.flipper_bodies):
-                body.angle = state.flipper_angle[env, j]  # exactly the kernel's angle
+                body.angle = angle[j]  # exactly the kernel's angle
             for kick, nx, ny in self.pending_kicks:
                 self.ball.velocity += (kick * nx, kick * ny)
             self.pending_kicks.clear()
-            if not space_before:
-                continue
-            after = self.ball.position
-            dx, dy = after.x - before.x, after.y - before.y
-            drain = cross_sensors(
-                before.x, before.y, dx, dy, world.packed.sensors, world.packed.sensor_drain,
-                self.crossings,
-            )  # fmt: skip
-            for j, u in enumerate(self.crossings):
-                if u <= drain and u < math.inf:
-                    state.hits[env, first_sensor + j] += 1
-                    log_contact(state, env, first_sensor + j, self.time + u * h, 0.0)
-            if drain < math.inf:
-                self.ball.position = (before.x + drain * dx, before.y + drain * dy)
-                state.active[env] = False
-                self._remove_ball()
+            if space_before:
+                self._cross_sensors(before)
         self._sync_ball_out()
+
+    def _cross_sensors(self, before: "pymunk.Vec2d") -> None:
+        """The kernel's sensor bookkeeping on the ball's move over the substep just stepped;
+        a drained ball leaves the space where it crossed the drain."""
+        world, env = self.world, self.env
+        after = self.ball.position
+        dx, dy = after.x - before.x, after.y - before.y
+        h = world.settings.dt / world.settings.substeps
+        drain = record_crossings(
+            world.state, env, world.geometry, before.x, before.y, dx, dy, self.time, h,
+            world.scratch.crossings[env],
+        )  # fmt: skip
+        if drain < math.inf:
+            self.ball.position = (before.x + drain * dx, before.y + drain * dy)
+            world.state.active[env] = False
+            self._remove_ball()
 
     def _sync_ball_in(self) -> None:
         """Write the state arrays into the ball body (they may have been set from outside)."""
@@ -250,8 +254,7 @@ def _flipper_shapes(
 ) -> list["pymunk.Shape"]:
     """The tapered capsule as pymunk shapes in the body frame (pivot at the origin, tip on +x):
     both circles and the quadrilateral between their common tangent points."""
-    face_x = (base_radius - tip_radius) / length  # the faces' outward normal (face_x, +-face_y)
-    face_y = math.sqrt(1.0 - face_x * face_x)
+    face_x, face_y = capsule_face_normal(length, base_radius, tip_radius)
     quad = [
         (base_radius * face_x, base_radius * face_y),
         (length + tip_radius * face_x, tip_radius * face_y),

@@ -1,25 +1,67 @@
 """Pure numerical kernels (numba): swept collision and the batched world step.
 
-Nothing here imports from Gymnasium, YAML or rendering code; everything works on floats and
-arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1``.
+Nothing here imports from Gymnasium, YAML, rendering code or the rest of the package; everything
+works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1``.
+
+- ``sweep.py``: swept ball-segment and ball-circle tests, point-segment distance;
+- ``flipper.py``: swept contact with a rotating flipper (a kinematic tapered capsule);
+- ``step.py``: the world step over a batch of envs, split into named helpers;
+- ``data.py``: the kernel's data (``Geometry``, ``Settings``, ``State``, ``Scratch``) and their
+  constructors ``make_state`` and ``make_scratch``;
+- ``columns.py``: what each column of those arrays means.
 """
 
-from pinball_env.physics.flipper import capsule_distance, sweep_capsule, sweep_flipper
+from pinball_env.physics.data import (
+    CONTACT_CAPACITY,
+    Geometry,
+    Scratch,
+    Settings,
+    State,
+    element_count,
+    first_circle,
+    first_flipper,
+    first_sensor,
+    make_scratch,
+    make_state,
+    segment_bounds,
+)
+from pinball_env.physics.flipper import (
+    capsule_distance,
+    capsule_face_normal,
+    flipper_distance,
+    flipper_reach,
+    sweep_capsule,
+    sweep_flipper,
+)
+from pinball_env.physics.step import respond, step_world
 from pinball_env.physics.sweep import (
+    point_segment_distance,
     sweep_circle,
     sweep_circle_circle,
     sweep_circle_segment,
     sweep_point,
     sweep_segment,
 )
-from pinball_env.physics.world import Geometry, Settings, State, respond, step_world
 
 __all__ = [
+    "CONTACT_CAPACITY",
     "Geometry",
+    "Scratch",
     "Settings",
     "State",
     "capsule_distance",
+    "capsule_face_normal",
+    "element_count",
+    "first_circle",
+    "first_flipper",
+    "first_sensor",
+    "flipper_distance",
+    "flipper_reach",
+    "make_scratch",
+    "make_state",
+    "point_segment_distance",
     "respond",
+    "segment_bounds",
     "step_world",
     "sweep_capsule",
     "sweep_circle",

@@ -24,14 +24,27 @@ from pinball_env.physics.sweep import INF, norm, sweep_point, sweep_segment
 
 
 @njit(cache=True)
+def capsule_face_normal(length, rb, rt):
+    """Outward normal of the capsule's upper tangent face in its own frame, ``(nx, ny)``; the
+    lower face's is ``(nx, -ny)``. It leans back by the taper: ``nx = (rb - rt) / length``."""
+    nx = (rb - rt) / length
+    return nx, math.sqrt(1.0 - nx * nx)
+
+
+@njit(cache=True)
+def flipper_reach(length, rb, rt):
+    """Radius of the disc around the pivot that holds the flipper at any angle [m]."""
+    return max(rb, length + rt)
+
+
+@njit(cache=True)
 def capsule_distance(u, v, length, rb, rt):
     """Signed distance from (u, v) to the tapered capsule in its own frame, and the outward normal.
 
     Returns ``(distance, nx, ny)``; the distance is negative inside (exact outside, a usable
     approximation inside: the normal always points the way out of the nearest feature).
     """
-    face_nx = (rb - rt) / length  # the tangent faces' outward normal is (face_nx, +-face_ny)
-    face_ny = math.sqrt(1.0 - face_nx * face_nx)
+    face_nx, face_ny = capsule_face_normal(length, rb, rt)
     w = abs(v)
     sign = 1.0 if v >= 0.0 else -1.0
     along = u * face_ny - w * face_nx  # position along the face, from the base tangent point
@@ -61,8 +74,7 @@ def sweep_capsule(qx, qy, dx, dy, reach, length, rb, rt):
         if dx * nx + dy * ny < 0.0:
             return 0.0, nx, ny
         return INF, 0.0, 0.0
-    face_nx = (rb - rt) / length
-    face_ny = math.sqrt(1.0 - face_nx * face_nx)
+    face_nx, face_ny = capsule_face_normal(length, rb, rt)
     ax = (rb + reach) * face_nx  # tangent points of the grown faces (upper; lower mirrored)
     ay = (rb + reach) * face_ny
     bx = length + (rt + reach) * face_nx
@@ -113,8 +125,7 @@ def sweep_flipper(cx, cy, vx, vy, duration, r, px, py, length, rb, rt, angle0, o
     """
     speed = norm(vx, vy)
     dist = norm(cx - px, cy - py)
-    extent = max(rb, length + rt)  # the flipper stays inside this disc around its pivot
-    if dist - speed * duration > extent + r + 2.0 * tol:
+    if dist - speed * duration > flipper_reach(length, rb, rt) + r + 2.0 * tol:
         return INF, 0.0, 0.0, 0.0, 0.0
     rho = dist + speed * duration
     tau_a = 0.0

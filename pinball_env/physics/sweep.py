@@ -8,7 +8,7 @@ towards the ball, or ``t = inf`` when the ball does not touch the obstacle durin
 The scalar functions (``sweep_segment``, ``sweep_circle``) are what the world step calls in its hot
 loop; ``sweep_circle_segment`` and ``sweep_circle_circle`` wrap them for array arguments.
 
-Cases handled, in order (see shared/design/physics.md):
+Cases handled, in order:
 
 1. Start overlap: the ball already touches or overlaps the obstacle. Moving towards it is a
    contact at t = 0 with the normal from the closest point; moving away (or along it) is none.
@@ -39,6 +39,26 @@ def norm(x, y):
     if squared > 1e-290:
         return math.sqrt(squared)
     return math.hypot(x, y)
+
+
+@njit(cache=True)
+def segment_offset(x, y, x0, y0, x1, y1):
+    """Vector from the point of segment P0-P1 closest to (x, y) to (x, y); a zero-length segment
+    is its point."""
+    ex = x1 - x0
+    ey = y1 - y0
+    length2 = ex * ex + ey * ey
+    s = 0.0
+    if length2 > 0.0:
+        s = min(max(((x - x0) * ex + (y - y0) * ey) / length2, 0.0), 1.0)
+    return x - x0 - s * ex, y - y0 - s * ey
+
+
+@njit(cache=True)
+def point_segment_distance(x, y, x0, y0, x1, y1):
+    """Distance from the point (x, y) to segment P0-P1."""
+    gx, gy = segment_offset(x, y, x0, y0, x1, y1)
+    return norm(gx, gy)
 
 
 @njit(cache=True)
@@ -104,12 +124,7 @@ def sweep_segment(cx, cy, dx, dy, r, x0, y0, x1, y1, one_sided):
         return INF, 0.0, 0.0
 
     # 1. Start overlap, from the closest point of the segment.
-    along = ux * (cx - x0) + uy * (cy - y0)
-    s = min(max(along, 0.0), length)
-    qx = x0 + ux * s
-    qy = y0 + uy * s
-    gx = cx - qx
-    gy = cy - qy
+    gx, gy = segment_offset(cx, cy, x0, y0, x1, y1)
     dist2 = gx * gx + gy * gy
     if dist2 <= r * r:
         if dist2 > 0.0:
@@ -126,6 +141,7 @@ def sweep_segment(cx, cy, dx, dy, r, x0, y0, x1, y1, one_sided):
         return INF, 0.0, 0.0
 
     # 2. Face: the lecture's intersection with the line offset by D2 = side * r.
+    along = ux * (cx - x0) + uy * (cy - y0)
     dv = nx * dx + ny * dy
     side = 1.0 if d0 > 0.0 else -1.0
     if d0 != 0.0 and side * dv < 0.0:

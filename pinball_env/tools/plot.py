@@ -1,9 +1,9 @@
-"""Draw a table, and optionally a ball's path on it, to PNG: ``python -m pinball_env.draw``.
+"""Plot a table, and optionally a ball's path on it, to PNG: ``python -m pinball_env.tools.plot``.
 
 Examples::
 
-    python -m pinball_env.draw box --out outputs/box.png
-    python -m pinball_env.draw box --trace 600 --velocity 2.5 1.0 --out outputs/trace.png
+    python -m pinball_env.tools.plot box --out outputs/box.png
+    python -m pinball_env.tools.plot box --trace 600 --velocity 2.5 1.0 --out outputs/trace.png
 
 Needs matplotlib (``pip install -e ".[plot]"``).
 """
@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pinball_env.physics import capsule_face_normal
 from pinball_env.table import Flipper, Table, load_table
 from pinball_env.world import World
 
@@ -29,7 +30,7 @@ def flipper_outline(flipper: Flipper, angle_deg: float, arc_points: int = 12) ->
     """Outline of a flipper at ``angle_deg`` as a closed polygon, (n, 2) world points."""
     rb, rt, length = flipper.base_radius, flipper.tip_radius, flipper.length
     # The tangent faces' outward normals make angle +-phi with the flipper axis.
-    phi = math.acos((rb - rt) / length)
+    phi = math.acos(capsule_face_normal(length, rb, rt)[0])
     tip = np.linspace(-phi, phi, arc_points)  # tip arc, around the front
     base = np.linspace(phi, 2 * math.pi - phi, arc_points)  # base arc, around the back
     local = np.vstack(
@@ -105,7 +106,7 @@ def draw_path(ax, path: np.ndarray, frame_rate: float) -> None:
     ax.figure.colorbar(points, ax=ax, label="time [s]", shrink=0.6)
 
 
-def render(
+def plot_table(
     table: Table,
     out: Path,
     trace_frames: int = 0,
@@ -140,7 +141,7 @@ def main(argv: list[str] | None = None) -> Path:
     )
     args = parser.parse_args(argv)
     velocity = tuple(args.velocity) if args.velocity else None
-    out = render(load_table(args.table), args.out, args.trace, velocity)
+    out = plot_table(load_table(args.table), args.out, args.trace, velocity)
     print(f"wrote {out}")
     return out
 

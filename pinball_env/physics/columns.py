@@ -1,4 +1,4 @@
-"""Column layout of the arrays the kernels share with the layers above.
+"""Column meaning of the arrays the kernels share with the layers above.
 
 Kept in one place so that the table packer, the kernels and the environment agree on what each
 column means. Units are SI throughout: metres, seconds, radians.

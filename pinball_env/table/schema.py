@@ -1,299 +1,54 @@
-"""Pinball tables: load a YAML description, validate it strictly, pack it for the kernels.
+"""The table schema: every key of a table description, its type and its range, and the checks
+that tie elements together (unique names, known materials, nothing overlapping the ball's start,
+a plunger shot that a gate lets through, ...).
 
-A table file describes the playfield in SI units (metres, seconds; only the slope and the flipper
-angles are in degrees) in the table frame: origin at the bottom-left corner, x to the right, y up
-the table. See ``configs/tables/box.yaml`` (a plain box) and ``configs/tables/classic.yaml`` (a
-full table with flippers, sensors and a plunger) for annotated examples. Every mistake in a file
+:func:`table_from_dict` validates a description (as read from YAML) into a frozen
+:class:`~pinball_env.table.model.Table`; :func:`table_to_dict` writes one back. Every mistake
 (unknown or missing key, wrong type, non-finite or out-of-range number, bad geometry) raises
-:class:`TableError` with the file name, the path of the element and the problem; nothing is
-silently defaulted.
+:class:`TableError` with the source, the path of the element and the problem; nothing is
+silently defaulted. :func:`check_ball_state` validates a ball state given at run time (reset
+options) the same way.
 """
 
 from __future__ import annotations
 
-import itertools
+import dataclasses
 import math
 import numbers
-import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import MISSING, dataclass, fields
-from functools import cached_property, partial
-from pathlib import Path
+from functools import partial
 from typing import Any, NoReturn
 
 import numpy as np
-import yaml
 
-from pinball_env.physics import layout
-from pinball_env.physics.flipper import flipper_distance
-from pinball_env.reachable import cell_of, free_space
+from pinball_env.physics import point_segment_distance
+from pinball_env.table.model import (
+    BUTTONS,
+    Ball,
+    Flipper,
+    Material,
+    Plunger,
+    Post,
+    Sensor,
+    Simulation,
+    Table,
+    Wall,
+    enclosure,
+    inside,
+)
+from pinball_env.table.reachable import cell_of
 
-TABLES_DIR = Path(__file__).resolve().parent.parent / "configs" / "tables"
 # Fastest ball a table or a reset may set [m/s]: a real one rarely passes 10 m/s, and the flipper
 # contact's work grows with the speed.
 MAX_BALL_SPEED = 100.0
-_SUFFIXES = (".yaml", ".yml")
 
 
 class TableError(ValueError):
     """A table description is invalid or cannot be read."""
 
 
-# --------------------------------------------------------------------------------------------
-# Table model
-# --------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Material:
-    """Surface properties shared by walls, posts and flippers."""
-
-    name: str
-    restitution: float  # coefficient of restitution of the normal velocity [-]
-    friction: float  # Coulomb friction coefficient ball/surface [-]
-
-
-@dataclass(frozen=True)
-class Wall:
-    """A polyline of straight segments."""
-
-    name: str
-    points: tuple[tuple[float, float], ...]
-    material: str
-    closed: bool = False  # adds the segment last point -> first point
-    one_sided: bool = False  # only stops a ball coming from the left of P0 -> P1
-    kick: float = 0.0  # speed added along the normal on every impact [m/s] (slingshots)
-    score: int = 0  # points per hit [-]
-
-    def segments(self) -> tuple[tuple[float, float, float, float], ...]:
-        """Segments (x0, y0, x1, y1) in order, the closing one last."""
-        ends = self.points + self.points[:1] if self.closed else self.points
-        return tuple((*p, *q) for p, q in itertools.pairwise(ends))
-
-
-@dataclass(frozen=True)
-class Post:
-    """A fixed circle: post or pop bumper."""
-
-    name: str
-    center: tuple[float, float]
-    radius: float
-    material: str
-    kick: float = 0.0  # speed added along the normal on every impact [m/s] (pop bumpers)
-    score: int = 0  # points per hit [-]
-
-
-# Flipper buttons, in the order of their action bits.
-_BUTTONS = ("left", "right")
-
-
-@dataclass(frozen=True)
-class Flipper:
-    """A flipper: a tapered capsule turning about its pivot between two stops.
-
-    The base circle (``base_radius``) is centred on the pivot, the tip circle (``tip_radius``)
-    ``length`` away along the flipper's angle; their common tangents join them. Angles are kept in
-    degrees as written in the file, counter-clockwise from +x.
-    """
-
-    name: str
-    pivot: tuple[float, float]  # centre of rotation and of the base circle [m]
-    length: float  # pivot to tip-circle centre [m]
-    base_radius: float  # radius of the circle around the pivot [m]
-    tip_radius: float  # radius of the circle at the tip [m]
-    rest_angle: float  # direction pivot -> tip when released [deg]
-    up_angle: float  # direction pivot -> tip when energised [deg]
-    stroke_time: float  # time to swing from rest to up [s]
-    return_time: float  # time to swing from up back to rest [s]
-    material: str  # name of a material [-]
-    button: str  # action bit that energises it: "left" or "right" [-]
-    score: int = 0  # points per hit [-]
-
-    @property
-    def swing(self) -> float:
-        """Angle swept between the two stops [rad]."""
-        return math.radians(abs(self.up_angle - self.rest_angle))
-
-    @property
-    def up_speed(self) -> float:
-        """Angular speed of the upstroke [rad/s]."""
-        return self.swing / self.stroke_time
-
-    @property
-    def down_speed(self) -> float:
-        """Angular speed of the return [rad/s]."""
-        return self.swing / self.return_time
-
-
-@dataclass(frozen=True)
-class Sensor:
-    """A line the ball rolls over (rollover, drain); a crossing of the ball's centre is an event."""
-
-    name: str
-    points: tuple[tuple[float, float], tuple[float, float]]  # the two ends [m]
-    drain: bool = False  # a crossing takes the ball out of play [-]
-    score: int = 0  # points per crossing [-]
-
-    @property
-    def segment(self) -> tuple[float, float, float, float]:
-        """The line as (x0, y0, x1, y1) [m]."""
-        return (*self.points[0], *self.points[1])
-
-
-@dataclass(frozen=True)
-class Plunger:
-    """How a ball is put into play from the shooter lane."""
-
-    position: tuple[float, float]  # ball centre at rest on the plunger [m]
-    speed: tuple[float, float]  # launch speed range (min, max), straight up the table [m/s]
-
-
-@dataclass(frozen=True)
-class Ball:
-    """The ball and its initial state."""
-
-    radius: float
-    mass: float
-    start: tuple[float, float]
-    velocity: tuple[float, float] = (0.0, 0.0)
-
-
-@dataclass(frozen=True)
-class Simulation:
-    """Time stepping and contact resolution settings."""
-
-    frame_rate: float = 60.0  # control frames per second
-    substeps: int = 10  # physics substeps per frame
-    max_passes: int = 16  # contact passes per substep
-    skin: float = 1e-6  # distance the ball is left off a surface after a contact [m]
-    resting_speed: float = 0.02  # below this normal approach speed a contact is inelastic [m/s]
-
-
-@dataclass(frozen=True, eq=False)
-class PackedTable:
-    """The table as read-only, C-contiguous arrays in the layout the kernels expect."""
-
-    segments: np.ndarray  # (S, 4) float64: x0, y0, x1, y1
-    segment_props: np.ndarray  # (S, layout.PROP_SIZE) float64
-    segment_one_sided: np.ndarray  # (S,) bool
-    circles: np.ndarray  # (C, 3) float64: x, y, radius
-    circle_props: np.ndarray  # (C, layout.PROP_SIZE) float64
-    # global element id -> name: segments ("wall[i]"), then circles, flippers and sensors
-    element_names: tuple[str, ...]
-    gravity: np.ndarray  # (2,) float64 [m/s^2], in the playfield plane
-    flippers: np.ndarray  # (F, layout.FLIPPER_SIZE) float64, columns layout.FLIPPER_*
-    flipper_props: np.ndarray  # (F, layout.PROP_SIZE) float64 (kick 0)
-    flipper_buttons: tuple[int, ...]  # (F,) action bit per flipper: 0 "left", 1 "right"
-    sensors: np.ndarray  # (K, 4) float64: x0, y0, x1, y1
-    sensor_drain: np.ndarray  # (K,) bool
-    element_scores: np.ndarray  # (S + C + F + K,) int64 points per hit, by global element id
-
-
-@dataclass(frozen=True)
-class Table:
-    """A validated table description."""
-
-    name: str
-    width: float
-    height: float
-    ball: Ball
-    materials: tuple[Material, ...]
-    walls: tuple[Wall, ...] = ()
-    posts: tuple[Post, ...] = ()
-    flippers: tuple[Flipper, ...] = ()
-    sensors: tuple[Sensor, ...] = ()
-    plunger: Plunger | None = None  # None: the ball is only ever placed at ball.start
-    slope_deg: float = 6.5  # inclination of the playfield [deg]
-    gravity: float = 9.81  # [m/s^2]
-    simulation: Simulation = Simulation()  # frozen, so sharing it is safe
-    source: str = "<dict>"  # file the table was read from
-
-    @cached_property
-    def free_space(self) -> np.ndarray:
-        """Grid of where a ball centre can get to from the plunger (or the ball's start), see
-        :mod:`pinball_env.reachable`; computed on first use."""
-        packed = self.pack()
-        start = self.plunger.position if self.plunger is not None else self.ball.start
-        two_sided = packed.segments[~packed.segment_one_sided]
-        return free_space(
-            self.width, self.height, self.ball.radius, two_sided, packed.circles,
-            packed.flippers, start,
-        )  # fmt: skip
-
-    @property
-    def gravity_vector(self) -> tuple[float, float]:
-        """Component of gravity in the playfield plane, pointing down the table [m/s^2]."""
-        return (0.0, -self.gravity * math.sin(math.radians(self.slope_deg)))
-
-    def material(self, name: str) -> Material:
-        """The material called ``name``."""
-        for material in self.materials:
-            if material.name == name:
-                return material
-        raise KeyError(f"{self.source}: no material {name!r} in table {self.name!r}")
-
-    def pack(self) -> PackedTable:
-        """Arrays for the kernels (see :class:`PackedTable`)."""
-
-        def props(material: str, kick: float) -> list[float]:
-            row = [0.0] * layout.PROP_SIZE
-            row[layout.PROP_RESTITUTION] = self.material(material).restitution
-            row[layout.PROP_FRICTION] = self.material(material).friction
-            row[layout.PROP_KICK] = kick
-            return row
-
-        segments, segment_props, one_sided, names, scores = [], [], [], [], []
-        for wall in self.walls:
-            for i, segment in enumerate(wall.segments()):
-                segments.append(segment)
-                segment_props.append(props(wall.material, wall.kick))
-                one_sided.append(wall.one_sided)
-                names.append(f"{wall.name}[{i}]")
-                scores.append(wall.score)
-        circles = [(*post.center, post.radius) for post in self.posts]
-        circle_props = [props(post.material, post.kick) for post in self.posts]
-        flippers = []
-        for flipper in self.flippers:
-            row = [0.0] * layout.FLIPPER_SIZE
-            row[layout.FLIPPER_PIVOT_X], row[layout.FLIPPER_PIVOT_Y] = flipper.pivot
-            row[layout.FLIPPER_LENGTH] = flipper.length
-            row[layout.FLIPPER_BASE_RADIUS] = flipper.base_radius
-            row[layout.FLIPPER_TIP_RADIUS] = flipper.tip_radius
-            row[layout.FLIPPER_REST_ANGLE] = math.radians(flipper.rest_angle)
-            row[layout.FLIPPER_UP_ANGLE] = math.radians(flipper.up_angle)
-            row[layout.FLIPPER_UP_SPEED] = flipper.up_speed
-            row[layout.FLIPPER_DOWN_SPEED] = flipper.down_speed
-            flippers.append(row)
-        flipper_props = [props(flipper.material, 0.0) for flipper in self.flippers]
-        for elements in (self.posts, self.flippers, self.sensors):
-            names.extend(element.name for element in elements)
-            scores.extend(element.score for element in elements)
-        return PackedTable(
-            segments=_frozen_array(segments, np.float64, (-1, 4)),
-            segment_props=_frozen_array(segment_props, np.float64, (-1, layout.PROP_SIZE)),
-            segment_one_sided=_frozen_array(one_sided, np.bool_, (-1,)),
-            circles=_frozen_array(circles, np.float64, (-1, 3)),
-            circle_props=_frozen_array(circle_props, np.float64, (-1, layout.PROP_SIZE)),
-            element_names=tuple(names),
-            gravity=_frozen_array(self.gravity_vector, np.float64, (2,)),
-            flippers=_frozen_array(flippers, np.float64, (-1, layout.FLIPPER_SIZE)),
-            flipper_props=_frozen_array(flipper_props, np.float64, (-1, layout.PROP_SIZE)),
-            flipper_buttons=tuple(_BUTTONS.index(flipper.button) for flipper in self.flippers),
-            sensors=_frozen_array([s.segment for s in self.sensors], np.float64, (-1, 4)),
-            sensor_drain=_frozen_array([s.drain for s in self.sensors], np.bool_, (-1,)),
-            element_scores=_frozen_array(scores, np.int64, (-1,)),
-        )
-
-
-def _frozen_array(rows: Any, dtype: type, shape: tuple[int, ...]) -> np.ndarray:
-    array = np.ascontiguousarray(np.asarray(rows, dtype=dtype).reshape(shape))
-    array.flags.writeable = False
-    return array
-
-
-# --------------------------------------------------------------------------------------------
-# Validation helpers, shared by every field
-# --------------------------------------------------------------------------------------------
+# --- validation helpers, shared by every field ---------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -465,24 +220,40 @@ _positive = partial(_number, low=0.0, open_low=True)
 _non_negative = partial(_number, low=0.0)
 _score = partial(_number, low=0, integer=True)
 
-
-# --------------------------------------------------------------------------------------------
-# Building a table
-# --------------------------------------------------------------------------------------------
+# --- building a table -----------------------------------------------------------------------------
 
 
 def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     """Validate a table description (as read from YAML) into a :class:`Table`."""
     top = _Loc(source)
     raw = _mapping(data, top, ["name", "playfield", "ball", "materials"], _TOP_KEYS)
-
     playfield = _mapping(raw["playfield"], top.key("playfield"), ["width", "height"])
     width = _positive(playfield["width"], top.key("playfield").key("width"))
     height = _positive(playfield["height"], top.key("playfield").key("height"))
     point = partial(_point, width=width, height=height)
-
     materials = _materials(raw["materials"], top.key("materials"))
-    walls = _group(raw, top, "walls", partial(_wall, point=point))
+    elements = _elements(raw, top, point, materials)
+    ball_loc = top.key("ball")
+    ball_parsers = {"radius": _positive, "mass": _positive, "start": point, "velocity": _velocity}
+    ball = _record(Ball, raw["ball"], ball_loc, ball_parsers)
+    _check_placed(ball.start, ball.radius, elements, ball_loc.key("start"))
+    return Table(
+        name=_string(raw["name"], top.key("name")),
+        width=width,
+        height=height,
+        ball=ball,
+        materials=materials,
+        source=source,
+        **elements,
+        **_options(raw, top, point, ball, elements),
+    )
+
+
+def _elements(
+    raw: Mapping[str, Any], top: _Loc, point: Parser, materials: tuple[Material, ...]
+) -> dict[str, tuple[Any, ...]]:
+    """The walls, posts, flippers and sensors, by group name (the Table's fields), checked
+    together: unique names, known materials, no flipper pivot in a wall."""
     post_parsers = {
         "name": _string,
         "center": point,
@@ -491,26 +262,31 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
         "kick": _non_negative,
         "score": _score,
     }
-    posts = _group(raw, top, "posts", partial(_record, Post, parsers=post_parsers))
-    flippers = _group(raw, top, "flippers", partial(_flipper, point=point))
-    sensors = _group(raw, top, "sensors", partial(_sensor, point=point))
-    elements = {"walls": walls, "posts": posts, "flippers": flippers, "sensors": sensors}
+    elements = {
+        "walls": _group(raw, top, "walls", partial(_wall, point=point)),
+        "posts": _group(raw, top, "posts", partial(_record, Post, parsers=post_parsers)),
+        "flippers": _group(raw, top, "flippers", partial(_flipper, point=point)),
+        "sensors": _group(raw, top, "sensors", partial(_sensor, point=point)),
+    }
     _check_elements(elements, materials, top)
-    _check_pivots(flippers, walls, top)
+    _check_pivots(elements["flippers"], elements["walls"], top)
+    return elements
 
-    ball_loc = top.key("ball")
-    ball_parsers = {"radius": _positive, "mass": _positive, "start": point, "velocity": _velocity}
-    ball = _record(Ball, raw["ball"], ball_loc, ball_parsers)
-    _check_clear(ball.start, ball.radius, walls, posts, flippers, ball_loc.key("start"))
-    _check_enclosed(ball.start, walls, ball_loc.key("start"))
 
+def _options(
+    raw: Mapping[str, Any],
+    top: _Loc,
+    point: Parser,
+    ball: Ball,
+    elements: Mapping[str, tuple[Any, ...]],
+) -> dict[str, Any]:
+    """The optional top-level keys that are given, parsed and checked (the rest default)."""
     options: dict[str, Any] = {}
     if "plunger" in raw:
         options["plunger"] = plunger = _plunger(raw["plunger"], top.key("plunger"), point)
         position_loc = top.key("plunger").key("position")
-        _check_clear(plunger.position, ball.radius, walls, posts, flippers, position_loc)
-        _check_enclosed(plunger.position, walls, position_loc)
-        _check_launch_path(plunger, walls, top)
+        _check_placed(plunger.position, ball.radius, elements, position_loc)
+        _check_launch_path(plunger, elements["walls"], top)
     if "slope_deg" in raw:
         options["slope_deg"] = _number(
             raw["slope_deg"], top.key("slope_deg"), 0.0, 90.0, open_high=True
@@ -528,19 +304,51 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
         options["simulation"] = _record(
             Simulation, raw["simulation"], top.key("simulation"), simulation_parsers
         )
-    return Table(
-        name=_string(raw["name"], top.key("name")),
-        width=width,
-        height=height,
-        ball=ball,
-        materials=materials,
-        walls=walls,
-        posts=posts,
-        flippers=flippers,
-        sensors=sensors,
-        source=source,
-        **options,
-    )
+    return options
+
+
+def table_to_dict(table: Table) -> dict[str, Any]:
+    """The description that :func:`table_from_dict` reads back as ``table`` (plain lists and
+    dicts, ready for ``yaml.safe_dump``)."""
+
+    def plain(element: Any, drop: tuple[str, ...] = ()) -> dict[str, Any]:
+        return {k: v for k, v in _plain(dataclasses.asdict(element)).items() if k not in drop}
+
+    data: dict[str, Any] = {
+        "name": table.name,
+        "playfield": {"width": table.width, "height": table.height},
+        "slope_deg": table.slope_deg,
+        "gravity": table.gravity,
+        "ball": plain(table.ball),
+        "materials": {m.name: plain(m, drop=("name",)) for m in table.materials},
+    }
+    for group in ("walls", "posts", "flippers", "sensors"):
+        data[group] = [plain(element) for element in getattr(table, group)]
+    if table.plunger is not None:
+        data["plunger"] = plain(table.plunger)
+    data["simulation"] = plain(table.simulation)
+    return data
+
+
+def _plain(value: Any) -> Any:
+    """``value`` with tuples turned into lists, in nested dicts and lists too."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _check_placed(
+    center: tuple[float, float],
+    radius: float,
+    elements: Mapping[str, tuple[Any, ...]],
+    loc: _Loc,
+) -> None:
+    """A ball of ``radius`` at ``center`` is clear of every element and inside the outline."""
+    walls = elements["walls"]
+    _check_clear(center, radius, walls, elements["posts"], elements["flippers"], loc)
+    _check_enclosed(center, walls, loc)
 
 
 # Keys of the top-level mapping; ``playfield`` holds Table.width and Table.height.
@@ -621,7 +429,7 @@ def _flipper(value: object, loc: _Loc, point: Parser) -> Flipper:
             "stroke_time": partial(_number, low=0.005, high=0.2),
             "return_time": partial(_number, low=0.005, high=0.5),
             "material": _string,
-            "button": partial(_choice, options=_BUTTONS),
+            "button": partial(_choice, options=BUTTONS),
             "score": _score,
         },
     )
@@ -729,7 +537,7 @@ def _check_clear(
                 f"(distance to its surface {gap:g} < ball radius {radius:g})"
             )
     for flipper in flippers:
-        gap = _flipper_distance(center, flipper, flipper.rest_angle)
+        gap = flipper.distance(center, flipper.rest_angle)
         if gap < radius:
             loc.fail(
                 f"ball overlaps flipper {flipper.name!r} at its rest angle "
@@ -737,34 +545,10 @@ def _check_clear(
             )
 
 
-def enclosure(walls: tuple[Wall, ...]) -> Wall | None:
-    """The closed wall enclosing the largest area (the table's outline), or None."""
-    closed = [wall for wall in walls if wall.closed]
-    return max(closed, key=lambda wall: abs(_polygon_area(wall.points)), default=None)
-
-
-def _polygon_area(points: tuple[tuple[float, float], ...]) -> float:
-    """Signed area of a closed polygon (shoelace formula)."""
-    return 0.5 * sum(
-        x0 * y1 - x1 * y0
-        for (x0, y0), (x1, y1) in zip(points, points[1:] + points[:1], strict=True)
-    )
-
-
-def _inside(point: tuple[float, float], polygon: tuple[tuple[float, float], ...]) -> bool:
-    """Even-odd test: is ``point`` inside the closed ``polygon``?"""
-    x, y = point
-    inside = False
-    for (x0, y0), (x1, y1) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
-        if (y0 > y) != (y1 > y) and x < x0 + (y - y0) * (x1 - x0) / (y1 - y0):
-            inside = not inside
-    return inside
-
-
 def _check_enclosed(point: tuple[float, float], walls: tuple[Wall, ...], loc: _Loc) -> None:
     """A ball centre lies inside the table's outline (when it has one)."""
     outline = enclosure(walls)
-    if outline is not None and not _inside(point, outline.points):
+    if outline is not None and not inside(point, outline.points):
         loc.fail(f"({point[0]:g}, {point[1]:g}) is outside the table's outline {outline.name!r}")
 
 
@@ -777,11 +561,8 @@ def check_ball_state(
     Errors name ``source``, e.g. ``reset options: ball_position: ...``."""
     where = _Loc(source)
     point = _point(position, where.key("ball_position"), table.width, table.height)
-    _check_clear(
-        point, table.ball.radius, table.walls, table.posts, table.flippers,
-        where.key("ball_position"),
-    )  # fmt: skip
-    _check_enclosed(point, table.walls, where.key("ball_position"))
+    elements = {"walls": table.walls, "posts": table.posts, "flippers": table.flippers}
+    _check_placed(point, table.ball.radius, elements, where.key("ball_position"))
     if not table.free_space[cell_of(point, table.free_space.shape)]:
         where.key("ball_position").fail(
             f"({point[0]:g}, {point[1]:g}) cannot be reached from the plunger: it is walled off "
@@ -812,67 +593,5 @@ def _check_launch_path(plunger: Plunger, walls: tuple[Wall, ...], top: _Loc) -> 
                 )
 
 
-def _flipper_distance(p: tuple[float, float], flipper: Flipper, angle_deg: float) -> float:
-    """Signed distance from ``p`` to the surface of ``flipper`` turned to ``angle_deg``."""
-    distance, _, _ = flipper_distance(
-        p[0], p[1], *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
-        math.radians(angle_deg),
-    )  # fmt: skip
-    return float(distance)
-
-
 def _segment_distance(p: tuple[float, float], segment: tuple[float, float, float, float]) -> float:
-    x0, y0, x1, y1 = segment
-    dx, dy = x1 - x0, y1 - y0
-    t = ((p[0] - x0) * dx + (p[1] - y0) * dy) / (dx * dx + dy * dy)
-    t = min(1.0, max(0.0, t))
-    return math.dist(p, (x0 + t * dx, y0 + t * dy))
-
-
-# --------------------------------------------------------------------------------------------
-# Files
-# --------------------------------------------------------------------------------------------
-
-
-class _StrictLoader(yaml.SafeLoader):
-    """Safe YAML loader that rejects a key repeated in one mapping (instead of keeping the last)."""
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        self.flatten_mapping(node)  # resolve YAML merge keys ("<<") first
-        seen: list[Any] = []
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r}", key_node.start_mark
-                )
-            seen.append(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-def available_tables() -> list[str]:
-    """Names of the tables in ``configs/tables``."""
-    if not TABLES_DIR.is_dir():
-        return []
-    return sorted(p.stem for p in TABLES_DIR.iterdir() if p.suffix in _SUFFIXES)
-
-
-def load_table(name_or_path: str | os.PathLike[str]) -> Table:
-    """Load a table from a .yaml/.yml path, or by bare name from ``configs/tables``."""
-    path = Path(name_or_path)
-    if path.suffix not in _SUFFIXES and len(path.parts) == 1:
-        candidates = [TABLES_DIR / f"{path.name}{suffix}" for suffix in _SUFFIXES]
-        path = next((p for p in candidates if p.is_file()), None)
-        if path is None:
-            available = ", ".join(available_tables()) or "none"
-            raise TableError(f"unknown table {str(name_or_path)!r} (available: {available})")
-    source = str(path)
-    if not path.is_file():
-        raise TableError(f"{source}: table file not found")
-    try:
-        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_StrictLoader)
-    except yaml.YAMLError as exc:
-        raise TableError(f"{source}: invalid YAML: {exc}") from exc
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TableError(f"{source}: cannot read the file: {exc}") from exc
-    return table_from_dict(data, source)
+    return float(point_segment_distance(p[0], p[1], *segment))

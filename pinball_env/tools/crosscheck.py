@@ -1,4 +1,4 @@
-"""Cross-check our swept physics against pymunk: ``python -m pinball_env.crosscheck``.
+"""Cross-check our swept physics against pymunk: ``python -m pinball_env.tools.crosscheck``.
 
 Runs the same scenarios on both engines (the same validated table object, built by
 ``pinball_env.backends.make_world``) and writes a report to ``--out`` (default
@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 
 from pinball_env.backends import make_world
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
-from pinball_env.physics.layout import BALL_VX, BALL_VY, BALL_X, BALL_Y
-from pinball_env.table import Table, load_table, table_from_dict
+from pinball_env.table import Table, load_table, table_from_dict, table_to_dict
 from pinball_env.world import World
 
 ENGINES = ("swept", "pymunk")
@@ -54,12 +54,17 @@ VELOCITY_TOLERANCE = (0.01, 0.001)  # relative to the incoming speed, absolute [
 FLIPPER_TOLERANCE = 0.10  # relative
 HIT_TIME = 0.1  # [s] every aimed scenario is set up to meet its target after this time
 
-# Flipper used by the flipper scenarios (the classic table's left flipper).
-FLIPPER = {
-    "name": "flipper", "pivot": [0.4, 0.4], "length": 0.07, "base_radius": 0.0116,
-    "tip_radius": 0.007, "rest_angle": -25, "up_angle": 25, "stroke_time": 0.022,
-    "return_time": 0.04, "material": "flipper", "button": "left",
-}  # fmt: skip
+
+def classic_left_flipper() -> dict[str, Any]:
+    """The classic table's left flipper as a table entry, its pivot moved to (0.4, 0.4) of the
+    scenario table and its material the scenario's ``flipper``."""
+    entries = table_to_dict(load_table("classic"))["flippers"]
+    left = next(entry for entry in entries if entry["button"] == "left")
+    return {**left, "name": "flipper", "pivot": [0.4, 0.4], "material": "flipper"}
+
+
+# Flipper used by the flipper scenarios.
+FLIPPER = classic_left_flipper()
 
 
 def scenario_table(
@@ -266,7 +271,7 @@ def flipper_swing(alongs: list[float]) -> list:
     pivot = np.array(FLIPPER["pivot"])
     axis = np.array([math.cos(angle), math.sin(angle)])
     normal = np.array([-math.sin(angle), math.cos(angle)])
-    omega = math.radians(50.0) / FLIPPER["stroke_time"]
+    omega = math.radians(abs(FLIPPER["up_angle"] - FLIPPER["rest_angle"])) / FLIPPER["stroke_time"]
     buttons = np.array([[True, False]])
     for along in alongs:
         gap = flipper_distance(*(pivot + along * axis + 0.05 * normal), *pivot,
@@ -598,7 +603,7 @@ def plot(report: dict[str, Any], path: Path) -> None:
     ax.set_title("Free run on the classic table: divergence")
 
     ax = axes[1, 1]
-    from pinball_env.draw import draw_table
+    from pinball_env.tools.plot import draw_table
 
     draw_table(ax, load_table("classic"))
     for engine, colour in zip(ENGINES, ("tab:blue", "tab:red"), strict=True):

@@ -15,8 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from pinball_env.physics.flipper import flipper_distance
-from pinball_env.physics.layout import (
+from pinball_env.physics.columns import (
     FLIPPER_BASE_RADIUS,
     FLIPPER_LENGTH,
     FLIPPER_PIVOT_X,
@@ -24,6 +23,8 @@ from pinball_env.physics.layout import (
     FLIPPER_REST_ANGLE,
     FLIPPER_TIP_RADIUS,
 )
+from pinball_env.physics.flipper import flipper_distance, flipper_reach
+from pinball_env.physics.sweep import segment_offset
 
 CELL = 0.001  # [m] grid spacing
 
@@ -34,8 +35,6 @@ def _block_segments(blocked, segments, reach, cell):
     n_rows, n_cols = blocked.shape
     for k in range(segments.shape[0]):
         x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
-        ex, ey = x1 - x0, y1 - y0
-        length2 = ex * ex + ey * ey
         c0 = max(int((min(x0, x1) - reach) / cell), 0)
         c1 = min(int((max(x0, x1) + reach) / cell) + 1, n_cols)
         r0 = max(int((min(y0, y1) - reach) / cell), 0)
@@ -43,11 +42,7 @@ def _block_segments(blocked, segments, reach, cell):
         for row in range(r0, r1):
             y = (row + 0.5) * cell
             for col in range(c0, c1):
-                x = (col + 0.5) * cell
-                s = 0.0
-                if length2 > 0.0:
-                    s = min(max(((x - x0) * ex + (y - y0) * ey) / length2, 0.0), 1.0)
-                dx, dy = x - x0 - s * ex, y - y0 - s * ey
+                dx, dy = segment_offset((col + 0.5) * cell, y, x0, y0, x1, y1)
                 if dx * dx + dy * dy < reach * reach:
                     blocked[row, col] = True
 
@@ -75,7 +70,8 @@ def _block_flippers(blocked, flippers, reach, cell):
     for k in range(flippers.shape[0]):
         f = flippers[k]
         px, py = f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y]
-        extent = max(f[FLIPPER_BASE_RADIUS], f[FLIPPER_LENGTH] + f[FLIPPER_TIP_RADIUS]) + reach
+        extent = flipper_reach(f[FLIPPER_LENGTH], f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS])
+        extent += reach
         for row in range(
             max(int((py - extent) / cell), 0), min(int((py + extent) / cell) + 1, n_rows)
         ):

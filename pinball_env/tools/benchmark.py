@@ -1,4 +1,4 @@
-"""Speed of the batched world step and of the env: ``python -m pinball_env.benchmark``.
+"""Speed of the batched world step and of the env: ``python -m pinball_env.tools.benchmark``.
 
 Steps a batch of balls with random launches on a table and prints a table of figures plus a JSON
 line (``--json PATH`` also writes it to a file). The headline figure is the time per ball-element
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pinball_env.physics import first_sensor
 from pinball_env.table import load_table
 from pinball_env.world import World
 
@@ -37,7 +38,7 @@ def measure(table: str, n_envs: int, frames: int, max_speed: float, seed: int) -
     random_launches(world, rng, max_speed)
     world.step()  # compile (or load the cached kernel) outside the timing
     random_launches(world, rng, max_speed)
-    elements = len(world.packed.element_names) - world.packed.sensors.shape[0]
+    elements = first_sensor(world.geometry)  # the solid ones, that every pass sweeps against
     substeps = world.table.simulation.substeps
     contacts = 0
     ball_frames = 0  # frames of balls in play: a drained ball costs (almost) nothing

@@ -1,4 +1,4 @@
-"""Watch the scripted heuristic play: ``python -m pinball_env.demo``.
+"""Watch the scripted heuristic play: ``python -m pinball_env.tools.demo``.
 
 Opens a pygame window (``pip install -e ".[render]"``) and plays games of ``Pinball-v0`` with
 :class:`~pinball_env.heuristic.HeuristicPolicy`, printing each game's score. Without a display
@@ -13,7 +13,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-import pinball_env  # noqa: F401  (registers Pinball-v0)
+from pinball_env import MAX_EPISODE_STEPS  # importing the package registers Pinball-v0
 from pinball_env.heuristic import HeuristicPolicy
 
 
@@ -38,7 +38,7 @@ def play(
     table: str = "classic",
     episodes: int = 1,
     seed: int = 0,
-    max_steps: int = 7200,
+    max_steps: int = MAX_EPISODE_STEPS,
     headless: bool = False,
     snapshot: Path | None = None,
 ) -> list[int]:
@@ -70,7 +70,9 @@ def main(argv: list[str] | None = None) -> list[int]:
     parser.add_argument("--table", default="classic", help="table name or YAML path")
     parser.add_argument("--episodes", type=int, default=1, help="games to play")
     parser.add_argument("--seed", type=int, default=0, help="seed of the first game")
-    parser.add_argument("--max-steps", type=int, default=7200, help="time limit per game")
+    parser.add_argument(
+        "--max-steps", type=int, default=MAX_EPISODE_STEPS, help="time limit per game"
+    )
     parser.add_argument("--headless", action="store_true", help="play without a window")
     parser.add_argument(
         "--snapshot", type=Path, default=Path("outputs/demo.png"),

@@ -1,0 +1,143 @@
+"""The kernel's data: the static table (``Geometry``), the simulation scalars (``Settings``), the
+per-env state (``State``) and the per-env work arrays (``Scratch``), with the constructors that fix
+their shapes and dtypes (as MuJoCo MJX's ``make_data`` does).
+
+Every per-env array has the env as its first axis, so a single env is a batch of one and a vector
+env steps N with the same kernel. Column meanings are in :mod:`pinball_env.physics.columns`.
+
+Element ids are global and ordered: segments first, then circles, flippers and sensors. The
+``first_*`` functions give the offsets; they are the only place that order is written down.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from pinball_env.physics.columns import BALL_STATE_SIZE, CONTACT_SIZE
+
+# Contacts logged per env and frame; more are counted but not logged. A frame of a ball rattling
+# in a corner makes a few dozen; the cap bounds memory, not physics.
+CONTACT_CAPACITY = 64
+
+
+class Geometry(NamedTuple):
+    """The static table as read-only arrays (see ``columns`` for the columns)."""
+
+    segments: np.ndarray  # (S, 4) float64: x0, y0, x1, y1 [m]
+    segment_bounds: np.ndarray  # (S, 3): bounding circles, from segment_bounds(segments)
+    segment_props: np.ndarray  # (S, PROP_SIZE) float64
+    segment_one_sided: np.ndarray  # (S,) bool
+    circles: np.ndarray  # (C, 3) float64: x, y, radius [m]
+    circle_props: np.ndarray  # (C, PROP_SIZE) float64
+    flippers: np.ndarray  # (F, FLIPPER_SIZE) float64
+    flipper_props: np.ndarray  # (F, PROP_SIZE) float64 (kick 0)
+    sensors: np.ndarray  # (K, 4) float64: x0, y0, x1, y1 [m]
+    sensor_drain: np.ndarray  # (K,) bool
+
+
+class Settings(NamedTuple):
+    """Scalars of the simulation."""
+
+    gravity_x: float  # [m/s^2], in the playfield plane
+    gravity_y: float
+    radius: float  # ball radius [m]
+    dt: float  # frame length [s]
+    substeps: int  # fixed substeps per frame
+    max_passes: int  # contact passes per substep
+    skin: float  # distance left between ball and surface after a contact [m]
+    resting_speed: float  # normal speed below which a contact is inelastic [m/s]
+
+
+class State(NamedTuple):
+    """Per-env state, updated in place by ``step_world``; the first axis is the env."""
+
+    balls: np.ndarray  # (N, BALL_STATE_SIZE) float64
+    active: np.ndarray  # (N,) bool: the ball is in play; cleared when it drains
+    flipper_angle: np.ndarray  # (N, F) float64 [rad]
+    flipper_omega: np.ndarray  # (N, F) float64 [rad/s], at the end of the frame
+    flipper_command: np.ndarray  # (N, F) bool, input: energised
+    contacts: np.ndarray  # (N, capacity, CONTACT_SIZE) float64: log of the frame's contacts
+    contact_count: np.ndarray  # (N,) int64: contacts of the frame (may exceed the capacity)
+    hits: np.ndarray  # (N, E) int64: hits of the frame per element id (scoring events)
+
+
+class Scratch(NamedTuple):
+    """Work arrays of the world step, one row per env so that envs can be stepped in parallel."""
+
+    targets: np.ndarray  # (N, F) float64: the stop each flipper moves to in this substep [rad]
+    omegas: np.ndarray  # (N, F) float64: its angular velocity on the way [rad/s]
+    stops: np.ndarray  # (N, F) float64: when it reaches the stop [s into the substep]
+    angles: np.ndarray  # (N, F) float64: angles at the current pass [rad]
+    pass_stops: np.ndarray  # (N, F) float64: stops counted from the current pass [s]
+    held: np.ndarray  # (N, F) bool: flippers stopped for the rest of a substep (a wedged ball)
+    crossings: np.ndarray  # (N, K) float64: sensor crossings of one move [fraction]
+    hit_elements: np.ndarray  # (N, max_passes) int64: hits of one substep, committed at its end
+
+
+@njit(cache=True)
+def first_circle(geometry):
+    """Element id of the first circle (the segments come first)."""
+    return geometry.segments.shape[0]
+
+
+@njit(cache=True)
+def first_flipper(geometry):
+    """Element id of the first flipper."""
+    return geometry.segments.shape[0] + geometry.circles.shape[0]
+
+
+@njit(cache=True)
+def first_sensor(geometry):
+    """Element id of the first sensor: the solid elements (that the ball collides with) are the
+    ids below it."""
+    return first_flipper(geometry) + geometry.flippers.shape[0]
+
+
+@njit(cache=True)
+def element_count(geometry):
+    """Number of elements, solid and sensors."""
+    return first_sensor(geometry) + geometry.sensors.shape[0]
+
+
+def segment_bounds(segments: np.ndarray) -> np.ndarray:
+    """Bounding circle of every segment, (S, 3): centre x, y and radius (half the length)."""
+    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    bounds = np.empty((segments.shape[0], 3))
+    bounds[:, 0] = 0.5 * (segments[:, 0] + segments[:, 2])
+    bounds[:, 1] = 0.5 * (segments[:, 1] + segments[:, 3])
+    bounds[:, 2] = 0.5 * np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    return bounds
+
+
+def make_state(geometry: Geometry, n_envs: int, contact_capacity: int = CONTACT_CAPACITY) -> State:
+    """A zeroed :class:`State` for ``n_envs`` envs on ``geometry``: no ball in play, flippers at
+    angle 0 and released (``World`` then puts them at rest)."""
+    if n_envs < 1:
+        raise ValueError(f"n_envs must be >= 1, got {n_envs}")
+    n_flippers = geometry.flippers.shape[0]
+    return State(
+        balls=np.zeros((n_envs, BALL_STATE_SIZE)),
+        active=np.zeros(n_envs, dtype=np.bool_),
+        flipper_angle=np.zeros((n_envs, n_flippers)),
+        flipper_omega=np.zeros((n_envs, n_flippers)),
+        flipper_command=np.zeros((n_envs, n_flippers), dtype=np.bool_),
+        contacts=np.zeros((n_envs, contact_capacity, CONTACT_SIZE)),
+        contact_count=np.zeros(n_envs, dtype=np.int64),
+        hits=np.zeros((n_envs, element_count(geometry)), dtype=np.int64),
+    )
+
+
+def make_scratch(geometry: Geometry, settings: Settings, n_envs: int) -> Scratch:
+    """The work arrays of ``step_world`` for ``n_envs`` envs."""
+    flippers = (n_envs, geometry.flippers.shape[0])
+    return Scratch(
+        targets=np.zeros(flippers),
+        omegas=np.zeros(flippers),
+        stops=np.zeros(flippers),
+        angles=np.zeros(flippers),
+        pass_stops=np.zeros(flippers),
+        held=np.zeros(flippers, dtype=np.bool_),
+        crossings=np.zeros((n_envs, geometry.sensors.shape[0])),
+        hit_elements=np.zeros((n_envs, settings.max_passes), dtype=np.int64),
+    )

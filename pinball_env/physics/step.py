@@ -1,0 +1,474 @@
+"""The world step: advance a batch of balls (one per env) through the table by swept collision.
+
+Every state array has a leading env axis, so the single env is a batch of one and a vector env
+calls the very same kernel, :func:`step_world`, whose body for one env is :func:`step_ball`.
+Each frame of length ``dt`` is cut into fixed substeps. In a substep the flippers follow their
+commands (kinematic: a constant angular speed towards the stop the command selects, see
+:func:`flipper_schedule`), gravity updates the ball's velocity (semi-implicit Euler), then the
+ball sweeps along its straight path and stops at the earliest contact over all walls, posts and
+flippers (ties go to the lowest element id, :func:`earliest_contact`), responds, and sweeps the
+remaining time again (:func:`contact_passes`). A pass cap and a minimum-progress rule end the loop
+for a wedged ball: the rest of that substep is dropped, never skipped over, so the ball can stall
+for an instant but cannot tunnel; a flipper pushing a wedged ball stalls too, as a real coil does
+(:func:`hold_flippers_near`). Sensors (rollovers, the drain) are crossed, not collided with: a
+crossing of the ball's centre is an event, and a drain crossing takes the ball out of play
+(:func:`record_crossings`).
+
+Contact response (per unit mass, relative to the velocity of the surface, zero except on a
+swinging flipper): the normal velocity is reflected with restitution ``e`` (``e = 0`` below
+``resting_speed``, so a ball lying or rolling on a surface stays on it without jitter); friction
+is a Coulomb impulse, at most ``mu`` times the normal impulse, that drives the slip of the
+contact point towards zero, the ball being a solid sphere (I = 2/5 m r^2) whose spin about the
+playfield normal is part of its state; kicking elements (bumpers, slingshots) then add ``kick``
+along the normal. After a contact the ball is put ``skin`` off the surface (:func:`separate`).
+"""
+
+import math
+
+from numba import njit
+
+from pinball_env.physics.columns import (
+    BALL_SPIN,
+    BALL_VX,
+    BALL_VY,
+    BALL_X,
+    BALL_Y,
+    CONTACT_ELEMENT,
+    CONTACT_SPEED,
+    CONTACT_TIME,
+    FLIPPER_BASE_RADIUS,
+    FLIPPER_DOWN_SPEED,
+    FLIPPER_LENGTH,
+    FLIPPER_PIVOT_X,
+    FLIPPER_PIVOT_Y,
+    FLIPPER_REST_ANGLE,
+    FLIPPER_TIP_RADIUS,
+    FLIPPER_UP_ANGLE,
+    FLIPPER_UP_SPEED,
+    PROP_FRICTION,
+    PROP_KICK,
+    PROP_RESTITUTION,
+)
+from pinball_env.physics.data import first_circle, first_flipper, first_sensor
+from pinball_env.physics.flipper import flipper_distance, flipper_reach, sweep_flipper
+from pinball_env.physics.sweep import (
+    INF,
+    norm,
+    point_segment_distance,
+    sweep_circle,
+    sweep_segment,
+)
+
+# For a solid sphere, the share of the contact-point slip one friction impulse can remove:
+# 1 / (1 + m r^2 / I) with I = 2/5 m r^2. The remaining 5/7 goes into spin.
+ROLLING_SHARE = 2.0 / 7.0
+# Contacts that use less than this fraction of a substep make no progress ...
+MIN_PROGRESS = 1e-9
+# ... and after this many in a row the ball is wedged: the rest of the substep is dropped.
+MAX_STALLED_PASSES = 4
+# Flipper contacts are found within this fraction of the skin from the surface.
+FLIPPER_TOLERANCE = 0.25
+
+
+# --- contact response and the rules of a contact -------------------------------------------------
+
+
+@njit(cache=True)
+def respond(vx, vy, spin, nx, ny, svx, svy, r, restitution, friction, kick, resting_speed):
+    """Velocity and spin of the ball after a contact with normal n on a surface moving at sv.
+
+    Returns ``(vx, vy, spin, approach_speed)``, the last being the normal speed towards the
+    surface before the response (0 when the ball was not approaching it).
+    """
+    rvx = vx - svx
+    rvy = vy - svy
+    vn = rvx * nx + rvy * ny
+    if vn >= 0.0:
+        return vx, vy, spin, 0.0
+    e = restitution if -vn >= resting_speed else 0.0
+    jn = -(1.0 + e) * vn  # normal impulse per unit mass
+    vx += jn * nx
+    vy += jn * ny
+    # Slip of the contact point (at -r n from the centre) along the tangent t = rot+90(n).
+    tx = -ny
+    ty = nx
+    slip = rvx * tx + rvy * ty - r * spin
+    jt = min(ROLLING_SHARE * abs(slip), friction * jn)
+    if slip < 0.0:
+        jt = -jt
+    vx -= jt * tx
+    vy -= jt * ty
+    spin += 2.5 * jt / r  # torque of the friction impulse, I = 2/5 m r^2
+    if kick > 0.0:
+        vx += kick * nx
+        vy += kick * ny
+    return vx, vy, spin, -vn
+
+
+@njit(cache=True)
+def is_hit(speed, kick, resting_speed):
+    """Whether a contact is a hit (a scoring event): the ball strikes the surface, rather than
+    lying or rolling on it, or the surface kicks."""
+    return speed >= resting_speed or kick > 0.0
+
+
+@njit(cache=True)
+def log_contact(state, env, element, time, speed):
+    """Append a contact to env's log (counting it even when the log is full)."""
+    row = state.contact_count[env]
+    if row < state.contacts.shape[1]:
+        state.contacts[env, row, CONTACT_ELEMENT] = element
+        state.contacts[env, row, CONTACT_TIME] = time
+        state.contacts[env, row, CONTACT_SPEED] = speed
+    state.contact_count[env] = row + 1
+
+
+# --- the elements ---------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def element_props(element, geometry):
+    """Surface properties row of a solid element."""
+    j = element - first_circle(geometry)
+    if j < 0:
+        return geometry.segment_props[element]
+    if j < geometry.circles.shape[0]:
+        return geometry.circle_props[j]
+    return geometry.flipper_props[element - first_flipper(geometry)]
+
+
+@njit(cache=True)
+def surface_distance(x, y, element, geometry, angles):
+    """Distance from the point (x, y) to the surface of a solid element (negative inside), the
+    flippers at ``angles``."""
+    j = element - first_circle(geometry)
+    if j < 0:
+        s = geometry.segments
+        return point_segment_distance(
+            x, y, s[element, 0], s[element, 1], s[element, 2], s[element, 3]
+        )
+    c = geometry.circles
+    if j < c.shape[0]:
+        return norm(x - c[j, 0], y - c[j, 1]) - c[j, 2]
+    j = element - first_flipper(geometry)
+    f = geometry.flippers
+    d, _, _ = flipper_distance(
+        x, y, f[j, FLIPPER_PIVOT_X], f[j, FLIPPER_PIVOT_Y], f[j, FLIPPER_LENGTH],
+        f[j, FLIPPER_BASE_RADIUS], f[j, FLIPPER_TIP_RADIUS], angles[j],
+    )  # fmt: skip
+    return d
+
+
+@njit(cache=True)
+def reach_of(flipper):
+    """Radius of the disc around a flipper's pivot (a row of ``Geometry.flippers``) that holds it
+    at any angle [m]."""
+    return flipper_reach(
+        flipper[FLIPPER_LENGTH], flipper[FLIPPER_BASE_RADIUS], flipper[FLIPPER_TIP_RADIUS]
+    )
+
+
+# --- the flipper schedule ------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def flipper_motion(flipper, angle, energised):
+    """Angular velocity and time to reach the commanded stop, for a flipper at ``angle``.
+
+    Returns ``(target, omega, stop)``: the stop's angle [rad], the angular velocity on the way
+    [rad/s] and the time at which it gets there [s] (0 when it is there already).
+    """
+    if energised:
+        target = flipper[FLIPPER_UP_ANGLE]
+        speed = flipper[FLIPPER_UP_SPEED]
+    else:
+        target = flipper[FLIPPER_REST_ANGLE]
+        speed = flipper[FLIPPER_DOWN_SPEED]
+    if angle == target:
+        return target, 0.0, 0.0
+    omega = speed if target > angle else -speed
+    return target, omega, abs(target - angle) / speed
+
+
+@njit(cache=True)
+def flipper_angle_at(start, omega, stop, time):
+    """Angle of a flipper ``time`` seconds into a substep that it started at ``start``, turning
+    at ``omega`` until ``stop``."""
+    return start + omega * min(time, stop)
+
+
+@njit(cache=True)
+def flipper_end(start, target, omega, stop, held, held_time, h):
+    """A flipper's angle and angular velocity at the end of a substep of ``h`` seconds, from its
+    motion (:func:`flipper_motion`); a held flipper stops where it was ``held_time`` in."""
+    if held:
+        return flipper_angle_at(start, omega, stop, held_time), 0.0
+    if stop <= h:
+        return target, 0.0
+    return start + omega * h, omega
+
+
+# --- sweeping: the earliest contact --------------------------------------------------------------
+
+
+@njit(cache=True)
+def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_one_sided, circles):
+    """Earliest contact of a ball sweeping from (x, y) by (dx, dy) with the walls and posts.
+
+    Returns ``(t, nx, ny, element)``; ``element = -1`` (and ``t = inf``) when the path is free.
+    On equal times the lowest id wins. A segment whose bounding circle is out of the sweep's
+    reach is skipped without the full test.
+    """
+    best_t = INF
+    best_nx = 0.0
+    best_ny = 0.0
+    best = -1
+    travel = math.sqrt(dx * dx + dy * dy)
+    for j in range(segments.shape[0]):
+        mx = x - segment_bounds[j, 0]
+        my = y - segment_bounds[j, 1]
+        reach = r + travel + segment_bounds[j, 2]
+        if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
+            continue  # cannot touch: the margin covers rounding in this test
+        t, nx, ny = sweep_segment(
+            x, y, dx, dy, r,
+            segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3],
+            segment_one_sided[j],
+        )  # fmt: skip
+        if t < best_t:
+            best_t, best_nx, best_ny, best = t, nx, ny, j
+    offset = segments.shape[0]
+    for j in range(circles.shape[0]):
+        t, nx, ny = sweep_circle(x, y, dx, dy, r, circles[j, 0], circles[j, 1], circles[j, 2])
+        if t < best_t:
+            best_t, best_nx, best_ny, best = t, nx, ny, offset + j
+    return best_t, best_nx, best_ny, best
+
+
+@njit(cache=True)
+def earliest_flipper_contact(x, y, vx, vy, duration, r, flippers, angles, omegas, stops, tol):
+    """Earliest contact of a ball moving at (vx, vy) for ``duration`` seconds with a flipper.
+
+    ``angles``, ``omegas`` and ``stops`` give each flipper's angle now, its angular velocity and
+    when it reaches its stop. Returns ``(tau, nx, ny, svx, svy, flipper)`` with ``tau`` in
+    seconds and sv the surface velocity; ``flipper = -1`` (and ``tau = inf``) for none.
+    """
+    best_tau = INF
+    best_nx = 0.0
+    best_ny = 0.0
+    best_svx = 0.0
+    best_svy = 0.0
+    best = -1
+    for j in range(flippers.shape[0]):
+        f = flippers[j]
+        tau, nx, ny, svx, svy = sweep_flipper(
+            x, y, vx, vy, duration, r,
+            f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y], f[FLIPPER_LENGTH],
+            f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS],
+            angles[j], omegas[j], stops[j], tol,
+        )  # fmt: skip
+        if tau < best_tau:
+            best_tau, best_nx, best_ny, best_svx, best_svy, best = tau, nx, ny, svx, svy, j
+    return best_tau, best_nx, best_ny, best_svx, best_svy, best
+
+
+# --- sensors --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def sensor_crossing(x, y, dx, dy, sensor):
+    """Fraction of the move (x, y) -> (x + dx, y + dy) at which the centre crosses a sensor.
+
+    Half-open: a point exactly on the sensor line counts as behind it (the side opposite its
+    normal), so a path that ends on the line and goes on is counted once. ``inf`` for none.
+    """
+    x0 = sensor[0]
+    y0 = sensor[1]
+    ex = sensor[2] - x0
+    ey = sensor[3] - y0
+    side0 = ex * (y - y0) - ey * (x - x0)
+    side1 = ex * (y + dy - y0) - ey * (x + dx - x0)
+    if (side0 > 0.0) == (side1 > 0.0):
+        return INF
+    u = side0 / (side0 - side1)
+    along = ((x + dx * u - x0) * ex + (y + dy * u - y0) * ey) / (ex * ex + ey * ey)
+    if along < 0.0 or along >= 1.0:  # half-open too: sensors meeting end to end count once
+        return INF
+    return u
+
+
+@njit(cache=True)
+def cross_sensors(x, y, dx, dy, sensors, sensor_drain, crossings):
+    """Fractions of the move (x, y) -> (x + dx, y + dy) at which the centre crosses each sensor,
+    written to ``crossings`` (inf for none). Returns the earliest drain crossing (inf for none):
+    the ball leaves play there, so only crossings up to it happen."""
+    drain = INF
+    for j in range(sensors.shape[0]):
+        crossings[j] = sensor_crossing(x, y, dx, dy, sensors[j])
+        if sensor_drain[j] and crossings[j] < drain:
+            drain = crossings[j]
+    return drain
+
+
+@njit(cache=True)
+def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings):
+    """Count and log env's sensor crossings on the move (x, y) -> (x + dx, y + dy), made over
+    ``duration`` seconds from ``start`` [s into the frame]; those past a drain crossing do not
+    happen. Returns the fraction of the move at the drain crossing (inf for none)."""
+    drain = cross_sensors(x, y, dx, dy, geometry.sensors, geometry.sensor_drain, crossings)
+    offset = first_sensor(geometry)
+    for j in range(crossings.shape[0]):
+        if crossings[j] <= drain and crossings[j] < INF:
+            state.hits[env, offset + j] += 1
+            log_contact(state, env, offset + j, start + duration * crossings[j], 0.0)
+    return drain
+
+
+# --- one ball ------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held):
+    """A wedged ball (time left in its substep after the pass cap or the progress rule) has
+    the rest of the substep dropped; so has every flipper that is still moving ``held_time``
+    into it and could reach the ball, or it would sweep through the ball unchecked. Marks
+    those in ``held``; returns whether the ball is pinched: the flipper that last pushed into
+    it (``pusher``, -1 for none) is held, stalled against it as a real coil would be."""
+    for j in range(flippers.shape[0]):
+        near = norm(x - flippers[j, FLIPPER_PIVOT_X], y - flippers[j, FLIPPER_PIVOT_Y])
+        held[j] = near <= reach_of(flippers[j]) + r and omegas[j] != 0.0 and stops[j] > held_time
+    return pusher >= 0 and held[pusher]
+
+
+@njit(cache=True, inline="always")
+def step_ball(geometry, settings, state, scratch, env, flipper_id):
+    """Advance env ``env`` by one frame in place: its flippers, and its ball if in play.
+
+    ``flipper_id`` is the first flipper's element id. Per substep: the flipper schedule,
+    gravity, the contact passes (sweep to the earliest contact, count the sensors crossed on
+    the way, respond, separate, sweep the time left), the wedge release, and the flippers
+    moved to the end of the substep.
+
+    The pass loop is written out here, calling helpers that take numbers: numba counts a
+    reference to every array a compiled function receives or takes out of a tuple, and a
+    helper taking arrays in this loop costs more than the physics (measured: 4-5x slower).
+    """
+    h = settings.dt / settings.substeps
+    r = settings.radius
+    tol = FLIPPER_TOLERANCE * settings.skin
+    segments, bounds = geometry.segments, geometry.segment_bounds
+    one_sided, circles = geometry.segment_one_sided, geometry.circles
+    flippers, sensors = geometry.flippers, geometry.sensors
+    n_flippers = flippers.shape[0]
+    angle, omega = state.flipper_angle, state.flipper_omega
+    targets, omegas, stops = scratch.targets[env], scratch.omegas[env], scratch.stops[env]
+    angles, pass_stops = scratch.angles[env], scratch.pass_stops[env]
+    held, hit_elements = scratch.held[env], scratch.hit_elements[env]
+    state.contact_count[env] = 0
+    state.hits[env, :] = 0
+    ball = state.balls[env]
+    x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
+    for k in range(settings.substeps):
+        # The flipper schedule: each flipper's motion over the substep.
+        for j in range(n_flippers):
+            targets[j], omegas[j], stops[j] = flipper_motion(
+                flippers[j], angle[env, j], state.flipper_command[env, j]
+            )
+            held[j] = False
+        held_time = h
+        if state.active[env]:
+            vx += settings.gravity_x * h
+            vy += settings.gravity_y * h
+            remaining = h
+            stalled = n_hits = 0
+            pusher = -1  # the last flipper that pushed into the ball
+            for _ in range(settings.max_passes):
+                if remaining <= 0.0:
+                    break
+                elapsed = h - remaining
+                for j in range(n_flippers):
+                    angles[j] = flipper_angle_at(angle[env, j], omegas[j], stops[j], elapsed)
+                    pass_stops[j] = max(stops[j] - elapsed, 0.0)
+                t, nx, ny, element = earliest_static_contact(
+                    x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided, circles
+                )
+                svx = svy = 0.0
+                if n_flippers > 0:
+                    tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
+                        x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops, tol
+                    )
+                    if tau < t * remaining:  # a tie goes to the wall or post (lower id)
+                        t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
+                        element = flipper_id + flipper
+                used = remaining * min(t, 1.0)
+                # Sensor crossings on the way to the contact (or to the end of the substep),
+                # after a cheap test that rules out the common case.
+                crossed = False
+                for j in range(sensors.shape[0]):
+                    if sensor_crossing(x, y, vx * used, vy * used, sensors[j]) < INF:
+                        crossed = True
+                        break
+                if crossed:
+                    drain = record_crossings(
+                        state, env, geometry, x, y, vx * used, vy * used, k * h + elapsed, used,
+                        scratch.crossings[env],
+                    )  # fmt: skip
+                    if drain < INF:
+                        x += vx * used * drain
+                        y += vy * used * drain
+                        state.active[env] = False
+                        break
+                x += vx * used
+                y += vy * used
+                remaining -= used
+                if element < 0:
+                    break
+                props = element_props(element, geometry)
+                vx, vy, spin, speed = respond(
+                    vx, vy, spin, nx, ny, svx, svy, r,
+                    props[PROP_RESTITUTION], props[PROP_FRICTION], props[PROP_KICK],
+                    settings.resting_speed,
+                )  # fmt: skip
+                # Separation: leave the ball exactly skin off the surface it touched.
+                for j in range(n_flippers):
+                    angles[j] = flipper_angle_at(angle[env, j], omegas[j], stops[j], h - remaining)
+                push = r + settings.skin - surface_distance(x, y, element, geometry, angles)
+                x += nx * push
+                y += ny * push
+                log_contact(state, env, element, k * h + h - remaining, speed)
+                if is_hit(speed, props[PROP_KICK], settings.resting_speed):
+                    hit_elements[n_hits] = element
+                    n_hits += 1
+                if element >= flipper_id and svx * nx + svy * ny > 0.0:
+                    pusher = element - flipper_id
+                stalled = stalled + 1 if used <= MIN_PROGRESS * h else 0
+                if stalled >= MAX_STALLED_PASSES:
+                    break
+            pinched = False
+            if remaining > 0.0 and state.active[env]:
+                held_time = h - remaining
+                pinched = release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held)
+                if pinched:  # the pinched ball is at rest, and its pinch is no hit
+                    vx = vy = 0.0
+            if not pinched:
+                for n in range(n_hits):
+                    state.hits[env, hit_elements[n]] += 1
+        # Commit the flippers' angles at the end of the substep.
+        for j in range(n_flippers):
+            angle[env, j], omega[env, j] = flipper_end(
+                angle[env, j], targets[j], omegas[j], stops[j], held[j], held_time, h
+            )
+    ball[BALL_X], ball[BALL_Y] = x, y
+    ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
+
+
+@njit(cache=True)
+def step_world(geometry, settings, state, scratch):
+    """Advance every env by one frame ``settings.dt`` in place, logging contacts and hits.
+
+    Envs are independent: each reads and writes only its own rows of ``state`` and
+    ``scratch`` (so this loop can run in parallel).
+    """
+    flipper_id = first_flipper(geometry)
+    for env in range(state.balls.shape[0]):
+        step_ball(geometry, settings, state, scratch, env, flipper_id)

@@ -1,0 +1,53 @@
+"""Pinball tables as validated data.
+
+- ``model.py``: the table model (frozen dataclasses) and ``Table.pack()``, the kernel's arrays;
+- ``schema.py``: the validation schema, ``table_from_dict`` and ``table_to_dict``;
+- ``files.py``: YAML loading and dumping, and the built-in tables (``tables/*.yaml``, package
+  data);
+- ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
+"""
+
+from pinball_env.table.files import available_tables, builtin_tables_dir, dump_table, load_table
+from pinball_env.table.model import (
+    BUTTONS,
+    Ball,
+    Flipper,
+    Material,
+    Plunger,
+    Post,
+    Sensor,
+    Simulation,
+    Table,
+    Wall,
+    enclosure,
+)
+from pinball_env.table.schema import (
+    MAX_BALL_SPEED,
+    TableError,
+    check_ball_state,
+    table_from_dict,
+    table_to_dict,
+)
+
+__all__ = [
+    "BUTTONS",
+    "MAX_BALL_SPEED",
+    "Ball",
+    "Flipper",
+    "Material",
+    "Plunger",
+    "Post",
+    "Sensor",
+    "Simulation",
+    "Table",
+    "TableError",
+    "Wall",
+    "available_tables",
+    "builtin_tables_dir",
+    "check_ball_state",
+    "dump_table",
+    "enclosure",
+    "load_table",
+    "table_from_dict",
+    "table_to_dict",
+]

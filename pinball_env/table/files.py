@@ -1,0 +1,79 @@
+"""Table files: YAML in, YAML out, and the built-in tables shipped with the package.
+
+The built-in tables are package data in ``pinball_env/table/tables/`` (``classic.yaml``, the
+default, and ``box.yaml``), found through :mod:`importlib.resources` so that they work from a
+wheel as well as from a checkout.
+"""
+
+from __future__ import annotations
+
+import os
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from pinball_env.table.model import Table
+from pinball_env.table.schema import TableError, table_from_dict, table_to_dict
+
+SUFFIXES = (".yaml", ".yml")
+
+
+def builtin_tables_dir() -> Path:
+    """The folder of the built-in table files (inside the installed package)."""
+    return Path(str(resources.files("pinball_env.table") / "tables"))
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """Safe YAML loader that rejects a key repeated in one mapping (instead of keeping the last)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        self.flatten_mapping(node)  # resolve YAML merge keys ("<<") first
+        seen: list[Any] = []
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r}", key_node.start_mark
+                )
+            seen.append(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+def available_tables() -> list[str]:
+    """Names of the built-in tables."""
+    folder = builtin_tables_dir()
+    if not folder.is_dir():
+        return []
+    return sorted(p.stem for p in folder.iterdir() if p.suffix in SUFFIXES)
+
+
+def load_table(name_or_path: str | os.PathLike[str]) -> Table:
+    """Load a table from a .yaml/.yml path, or a built-in one by bare name (``"classic"``)."""
+    path = Path(name_or_path)
+    if path.suffix not in SUFFIXES and len(path.parts) == 1:
+        candidates = [builtin_tables_dir() / f"{path.name}{suffix}" for suffix in SUFFIXES]
+        path = next((p for p in candidates if p.is_file()), None)
+        if path is None:
+            available = ", ".join(available_tables()) or "none"
+            raise TableError(f"unknown table {str(name_or_path)!r} (available: {available})")
+    source = str(path)
+    if not path.is_file():
+        raise TableError(f"{source}: table file not found")
+    try:
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_StrictLoader)
+    except yaml.YAMLError as exc:
+        raise TableError(f"{source}: invalid YAML: {exc}") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TableError(f"{source}: cannot read the file: {exc}") from exc
+    return table_from_dict(data, source)
+
+
+def dump_table(table: Table, path: str | os.PathLike[str]) -> Path:
+    """Write ``table`` as a YAML file that :func:`load_table` reads back as the same table."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = yaml.safe_dump(table_to_dict(table), sort_keys=False, default_flow_style=None)
+    path.write_text(text, encoding="utf-8")
+    return path

@@ -1,0 +1,329 @@
+"""The table model: frozen dataclasses for every element, and the table packed for the kernels.
+
+A :class:`Table` is validated data (see :mod:`pinball_env.table.schema`, which builds it, and
+:mod:`pinball_env.table.files`, which reads it from YAML). Lengths are in metres, times in seconds;
+only the slope and the flipper angles are in degrees, as written in the files. The table frame has
+its origin at the bottom-left corner, x to the right and y up the table.
+
+:meth:`Table.pack` turns it into the kernel's :class:`~pinball_env.physics.Geometry`, and
+:meth:`Table.pack_settings` into its :class:`~pinball_env.physics.Settings`. Element ids follow
+the kernel's order (segments, circles, flippers, sensors): :attr:`Table.element_names` and
+:attr:`Table.element_scores` are indexed by them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from pinball_env.physics import Geometry, Settings, columns, flipper_distance, segment_bounds
+from pinball_env.table.reachable import free_space
+
+# The flipper buttons, in the order of the columns of a buttons array (and of the bits of a
+# discrete action, see ``pinball_env.game``).
+BUTTONS = ("left", "right")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Surface properties shared by walls, posts and flippers."""
+
+    name: str
+    restitution: float  # coefficient of restitution of the normal velocity [-]
+    friction: float  # Coulomb friction coefficient ball/surface [-]
+
+
+@dataclass(frozen=True)
+class Wall:
+    """A polyline of straight segments."""
+
+    name: str
+    points: tuple[tuple[float, float], ...]
+    material: str
+    closed: bool = False  # adds the segment last point -> first point
+    one_sided: bool = False  # only stops a ball coming from the left of P0 -> P1
+    kick: float = 0.0  # speed added along the normal on every impact [m/s] (slingshots)
+    score: int = 0  # points per hit [-]
+
+    def segments(self) -> tuple[tuple[float, float, float, float], ...]:
+        """Segments (x0, y0, x1, y1) in order, the closing one last."""
+        ends = self.points + self.points[:1] if self.closed else self.points
+        return tuple((*p, *q) for p, q in itertools.pairwise(ends))
+
+
+@dataclass(frozen=True)
+class Post:
+    """A fixed circle: post or pop bumper."""
+
+    name: str
+    center: tuple[float, float]
+    radius: float
+    material: str
+    kick: float = 0.0  # speed added along the normal on every impact [m/s] (pop bumpers)
+    score: int = 0  # points per hit [-]
+
+
+@dataclass(frozen=True)
+class Flipper:
+    """A flipper: a tapered capsule turning about its pivot between two stops.
+
+    The base circle (``base_radius``) is centred on the pivot, the tip circle (``tip_radius``)
+    ``length`` away along the flipper's angle; their common tangents join them. Angles are kept in
+    degrees as written in the file, counter-clockwise from +x.
+    """
+
+    name: str
+    pivot: tuple[float, float]  # centre of rotation and of the base circle [m]
+    length: float  # pivot to tip-circle centre [m]
+    base_radius: float  # radius of the circle around the pivot [m]
+    tip_radius: float  # radius of the circle at the tip [m]
+    rest_angle: float  # direction pivot -> tip when released [deg]
+    up_angle: float  # direction pivot -> tip when energised [deg]
+    stroke_time: float  # time to swing from rest to up [s]
+    return_time: float  # time to swing from up back to rest [s]
+    material: str  # name of a material [-]
+    button: str  # action bit that energises it: "left" or "right" [-]
+    score: int = 0  # points per hit [-]
+
+    @property
+    def button_index(self) -> int:
+        """Column of the flipper's button in a buttons array (see :data:`BUTTONS`)."""
+        return BUTTONS.index(self.button)
+
+    def distance(self, point: tuple[float, float], angle_deg: float) -> float:
+        """Signed distance from ``point`` to the flipper's surface, turned to ``angle_deg``
+        (negative inside), by the kernel's own ``flipper_distance``."""
+        distance, _, _ = flipper_distance(
+            point[0], point[1], *self.pivot, self.length, self.base_radius, self.tip_radius,
+            math.radians(angle_deg),
+        )  # fmt: skip
+        return float(distance)
+
+    @property
+    def swing(self) -> float:
+        """Angle swept between the two stops [rad]."""
+        return math.radians(abs(self.up_angle - self.rest_angle))
+
+    @property
+    def up_speed(self) -> float:
+        """Angular speed of the upstroke [rad/s]."""
+        return self.swing / self.stroke_time
+
+    @property
+    def down_speed(self) -> float:
+        """Angular speed of the return [rad/s]."""
+        return self.swing / self.return_time
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """A line the ball rolls over (rollover, drain); a crossing of the ball's centre is an event."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # the two ends [m]
+    drain: bool = False  # a crossing takes the ball out of play [-]
+    score: int = 0  # points per crossing [-]
+
+    @property
+    def segment(self) -> tuple[float, float, float, float]:
+        """The line as (x0, y0, x1, y1) [m]."""
+        return (*self.points[0], *self.points[1])
+
+
+@dataclass(frozen=True)
+class Plunger:
+    """How a ball is put into play from the shooter lane."""
+
+    position: tuple[float, float]  # ball centre at rest on the plunger [m]
+    speed: tuple[float, float]  # launch speed range (min, max), straight up the table [m/s]
+
+
+@dataclass(frozen=True)
+class Ball:
+    """The ball and its initial state."""
+
+    radius: float
+    mass: float
+    start: tuple[float, float]
+    velocity: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Time stepping and contact resolution settings."""
+
+    frame_rate: float = 60.0  # control frames per second
+    substeps: int = 10  # physics substeps per frame
+    max_passes: int = 16  # contact passes per substep
+    skin: float = 1e-6  # distance the ball is left off a surface after a contact [m]
+    resting_speed: float = 0.02  # below this normal approach speed a contact is inelastic [m/s]
+
+
+@dataclass(frozen=True)
+class Table:
+    """A validated table description."""
+
+    name: str
+    width: float  # playfield width [m]
+    height: float  # playfield length, up the table [m]
+    ball: Ball
+    materials: tuple[Material, ...]
+    walls: tuple[Wall, ...] = ()
+    posts: tuple[Post, ...] = ()
+    flippers: tuple[Flipper, ...] = ()
+    sensors: tuple[Sensor, ...] = ()
+    plunger: Plunger | None = None  # None: the ball is only ever placed at ball.start
+    slope_deg: float = 6.5  # inclination of the playfield [deg]
+    gravity: float = 9.81  # [m/s^2]
+    simulation: Simulation = Simulation()  # frozen, so sharing it is safe
+    source: str = "<dict>"  # file the table was read from
+
+    @cached_property
+    def free_space(self) -> np.ndarray:
+        """Grid of where a ball centre can get to from the plunger (or the ball's start), see
+        :mod:`pinball_env.table.reachable`; computed on first use."""
+        geometry = self.pack()
+        start = self.plunger.position if self.plunger is not None else self.ball.start
+        two_sided = geometry.segments[~geometry.segment_one_sided]
+        return free_space(
+            self.width, self.height, self.ball.radius, two_sided, geometry.circles,
+            geometry.flippers, start,
+        )  # fmt: skip
+
+    @property
+    def outline(self) -> Wall | None:
+        """The closed wall enclosing the largest area, which keeps the ball in; None if none."""
+        return enclosure(self.walls)
+
+    @property
+    def gravity_vector(self) -> tuple[float, float]:
+        """Component of gravity in the playfield plane, pointing down the table [m/s^2]."""
+        return (0.0, -self.gravity * math.sin(math.radians(self.slope_deg)))
+
+    def material(self, name: str) -> Material:
+        """The material called ``name``."""
+        for material in self.materials:
+            if material.name == name:
+                return material
+        raise KeyError(f"{self.source}: no material {name!r} in table {self.name!r}")
+
+    @cached_property
+    def element_names(self) -> tuple[str, ...]:
+        """Name of every element by global id: segments (``"wall[i]"``), circles, flippers and
+        sensors."""
+        segments = [f"{wall.name}[{i}]" for wall in self.walls for i in range(len(wall.segments()))]
+        return (*segments, *(e.name for e in (*self.posts, *self.flippers, *self.sensors)))
+
+    @cached_property
+    def element_scores(self) -> np.ndarray:
+        """Points per hit of every element by global id, (E,) int64, read-only."""
+        segments = [wall.score for wall in self.walls for _ in wall.segments()]
+        others = [e.score for e in (*self.posts, *self.flippers, *self.sensors)]
+        return _frozen_array(segments + others, np.int64, (-1,))
+
+    @property
+    def flipper_buttons(self) -> tuple[int, ...]:
+        """The button column (see :data:`BUTTONS`) that drives each flipper."""
+        return tuple(flipper.button_index for flipper in self.flippers)
+
+    def pack(self) -> Geometry:
+        """The kernel's read-only arrays for this table (see ``physics.Geometry``)."""
+        segments, segment_props, one_sided = [], [], []
+        for wall in self.walls:
+            for segment in wall.segments():
+                segments.append(segment)
+                segment_props.append(self._props(wall.material, wall.kick))
+                one_sided.append(wall.one_sided)
+        segments = _frozen_array(segments, np.float64, (-1, 4))
+        props = (-1, columns.PROP_SIZE)
+        circles = [(*post.center, post.radius) for post in self.posts]
+        circle_props = [self._props(post.material, post.kick) for post in self.posts]
+        flippers = [_flipper_row(flipper) for flipper in self.flippers]
+        flipper_props = [self._props(flipper.material, 0.0) for flipper in self.flippers]
+        return Geometry(
+            segments=segments,
+            segment_bounds=_frozen_array(segment_bounds(segments), np.float64, (-1, 3)),
+            segment_props=_frozen_array(segment_props, np.float64, props),
+            segment_one_sided=_frozen_array(one_sided, np.bool_, (-1,)),
+            circles=_frozen_array(circles, np.float64, (-1, 3)),
+            circle_props=_frozen_array(circle_props, np.float64, props),
+            flippers=_frozen_array(flippers, np.float64, (-1, columns.FLIPPER_SIZE)),
+            flipper_props=_frozen_array(flipper_props, np.float64, props),
+            sensors=_frozen_array([s.segment for s in self.sensors], np.float64, (-1, 4)),
+            sensor_drain=_frozen_array([s.drain for s in self.sensors], np.bool_, (-1,)),
+        )
+
+    def pack_settings(self) -> Settings:
+        """The kernel's simulation scalars for this table."""
+        sim = self.simulation
+        gravity_x, gravity_y = self.gravity_vector
+        return Settings(
+            gravity_x=gravity_x,
+            gravity_y=gravity_y,
+            radius=self.ball.radius,
+            dt=1.0 / sim.frame_rate,
+            substeps=sim.substeps,
+            max_passes=sim.max_passes,
+            skin=sim.skin,
+            resting_speed=sim.resting_speed,
+        )
+
+    def _props(self, material: str, kick: float) -> list[float]:
+        """A surface properties row (columns ``PROP_*``)."""
+        row = [0.0] * columns.PROP_SIZE
+        row[columns.PROP_RESTITUTION] = self.material(material).restitution
+        row[columns.PROP_FRICTION] = self.material(material).friction
+        row[columns.PROP_KICK] = kick
+        return row
+
+
+def _flipper_row(flipper: Flipper) -> list[float]:
+    """A flipper as a row of the kernel's flipper array (columns ``FLIPPER_*``)."""
+    row = [0.0] * columns.FLIPPER_SIZE
+    row[columns.FLIPPER_PIVOT_X], row[columns.FLIPPER_PIVOT_Y] = flipper.pivot
+    row[columns.FLIPPER_LENGTH] = flipper.length
+    row[columns.FLIPPER_BASE_RADIUS] = flipper.base_radius
+    row[columns.FLIPPER_TIP_RADIUS] = flipper.tip_radius
+    row[columns.FLIPPER_REST_ANGLE] = math.radians(flipper.rest_angle)
+    row[columns.FLIPPER_UP_ANGLE] = math.radians(flipper.up_angle)
+    row[columns.FLIPPER_UP_SPEED] = flipper.up_speed
+    row[columns.FLIPPER_DOWN_SPEED] = flipper.down_speed
+    return row
+
+
+def _frozen_array(rows: Any, dtype: type, shape: tuple[int, ...]) -> np.ndarray:
+    array = np.ascontiguousarray(np.asarray(rows, dtype=dtype).reshape(shape))
+    array.flags.writeable = False
+    return array
+
+
+# --- polygons -------------------------------------------------------------------------------------
+
+
+def enclosure(walls: tuple[Wall, ...]) -> Wall | None:
+    """The closed wall enclosing the largest area (the table's outline), or None."""
+    closed = [wall for wall in walls if wall.closed]
+    return max(closed, key=lambda wall: abs(polygon_area(wall.points)), default=None)
+
+
+def polygon_area(points: tuple[tuple[float, float], ...]) -> float:
+    """Signed area of a closed polygon (shoelace formula)."""
+    return 0.5 * sum(
+        x0 * y1 - x1 * y0
+        for (x0, y0), (x1, y1) in zip(points, points[1:] + points[:1], strict=True)
+    )
+
+
+def inside(point: tuple[float, float], polygon: tuple[tuple[float, float], ...]) -> bool:
+    """Even-odd test: is ``point`` inside the closed ``polygon``?"""
+    x, y = point
+    result = False
+    for (x0, y0), (x1, y1) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
+        if (y0 > y) != (y1 > y) and x < x0 + (y - y0) * (x1 - x0) / (y1 - y0):
+            result = not result
+    return result
