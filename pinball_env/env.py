@@ -102,7 +102,8 @@ class PinballEnv(gym.Env):
              render_mode=None)
     ```
 
-    - ``table``: a table name from ``configs/tables`` or a path to a table YAML file.
+    - ``table``: a built-in table name (``"classic"`` or ``"box"``, package data in
+      ``pinball_env/table/tables``), a path to a table YAML file, or a ``Table``.
     - ``obs_type``: ``"state"``, ``"rgb"`` or ``"grayscale"``.
     - ``action_type``: ``"discrete"`` or ``"multibinary"``.
     - ``balls``: balls per game (>= 1).

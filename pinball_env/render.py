@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from pinball_env.physics.flipper import flipper_distance
+from pinball_env.physics.sweep import segment_offset
 from pinball_env.table import Table
 
 Colour = Sequence[int] | np.ndarray  # (R, G, B), or (luma,) for the grayscale layer
@@ -176,13 +177,10 @@ class Renderer:
         # Segment ends and pixel centres in pixel coordinates (column, row).
         ax, ay = x0 * self._sx, (self.table.height - y0) * self._sy
         bx, by = x1 * self._sx, (self.table.height - y1) * self._sy
-        px = np.arange(cols.start, cols.stop)[None, :] + 0.5 - ax
-        py = np.arange(rows.start, rows.stop)[:, None] + 0.5 - ay
-        dx, dy = bx - ax, by - ay
-        length2 = dx * dx + dy * dy
-        t = np.clip((px * dx + py * dy) / length2, 0.0, 1.0) if length2 > 0.0 else 0.0
-        mask = (px - t * dx) ** 2 + (py - t * dy) ** 2 <= half_width * half_width
-        image[rows, cols][mask] = colour
+        columns = np.arange(cols.start, cols.stop) + 0.5
+        pixel_rows = np.arange(rows.start, rows.stop) + 0.5
+        distance2 = _segment_field(columns, pixel_rows, ax, ay, bx, by)
+        image[rows, cols][distance2 <= half_width * half_width] = colour
 
     def _disc(self, image: np.ndarray, cx: float, cy: float, radius: float, colour: Colour) -> None:
         """Paint a world disc (an ellipse in a stretched image) plus its 0.5 px outline band."""
@@ -233,6 +231,18 @@ class Renderer:
         gradient = np.hypot(nx / self._sx, ny / self._sy)
         mask = distance <= OUTLINE_BAND * gradient
         image[rows, cols][mask] = colour
+
+
+@njit(cache=True)
+def _segment_field(xs, ys, x0, y0, x1, y1):
+    """Squared distance from every point (xs[j], ys[i]) to segment P0-P1 (the kernel's own
+    ``segment_offset``), an array of shape (len(ys), len(xs))."""
+    distance2 = np.empty((ys.shape[0], xs.shape[0]))
+    for i in range(ys.shape[0]):
+        for j in range(xs.shape[0]):
+            gx, gy = segment_offset(xs[j], ys[i], x0, y0, x1, y1)
+            distance2[i, j] = gx * gx + gy * gy
+    return distance2
 
 
 @njit(cache=True)

@@ -25,8 +25,10 @@ from pinball_env.table import (
     Wall,
     available_tables,
     builtin_tables_dir,
+    dump_table,
     load_table,
     table_from_dict,
+    table_to_dict,
 )
 
 BOX = builtin_tables_dir() / "box.yaml"
@@ -890,3 +892,23 @@ def test_free_space_reaches_every_lane_but_not_inside_a_slingshot() -> None:
     assert reachable(0.2365, 0.06)  # below the flippers, above the drain
     assert not reachable(0.0964, 0.2585)  # inside the left slingshot's triangle
     assert not reachable(0.3766, 0.2585)  # and the right one
+
+
+# --- YAML out, and the built-in tables -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["classic", "box"])
+def test_a_dumped_table_loads_back_as_the_same_table(name: str, tmp_path: Path) -> None:
+    table = load_table(name)
+    path = dump_table(table, tmp_path / f"{name}.yaml")
+    again = load_table(path)
+    assert dataclasses.replace(again, source=table.source) == table
+    assert table_from_dict(table_to_dict(table), table.source) == table
+
+
+def test_built_in_tables_live_in_the_package() -> None:
+    folder = builtin_tables_dir()
+    assert folder.parent.name == "table" and folder.parent.parent.name == "pinball_env"
+    assert sorted(p.name for p in folder.glob("*.yaml")) == ["box.yaml", "classic.yaml"]
+    with pytest.raises(TableError, match=r"unknown table 'nope' \(available: box, classic\)"):
+        load_table("nope")

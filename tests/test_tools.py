@@ -1,5 +1,6 @@
 """The runnable modules: benchmark and table drawing (smoke runs with tiny budgets)."""
 
+import importlib.util
 import json
 
 from pinball_env.tools import benchmark, plot
@@ -20,3 +21,8 @@ def test_draw_renders_tables_and_traces(tmp_path):
     for table in ("classic", "box"):
         out = plot.main([table, "--out", str(tmp_path / f"{table}.png"), "--trace", "30"])
         assert out.stat().st_size > 10_000
+
+
+def test_the_tools_run_as_modules_of_pinball_env_tools():
+    for name in ("demo", "plot", "crosscheck", "benchmark"):
+        assert importlib.util.find_spec(f"pinball_env.tools.{name}") is not None, name

@@ -1,0 +1,110 @@
+"""The rules over a batch of envs: N games in one Game are N single games, bitwise; snapshots."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from pinball_env.game import DISCRETE_BUTTONS, Game, discrete_action
+from pinball_env.table import BUTTONS, load_table
+
+CLASSIC = load_table("classic")
+SEEDS = [3, 14, 15, 92, 65]
+
+
+def random_actions(action_type: str, n_envs: int, steps: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    if action_type == "discrete":
+        return rng.integers(0, len(DISCRETE_BUTTONS), size=(steps, n_envs))
+    return rng.integers(0, 2, size=(steps, n_envs, len(BUTTONS)))
+
+
+def play(game: Game, rngs: list[np.random.Generator], actions: np.ndarray) -> list[tuple]:
+    """Every step's observation, reward, game over and info, each env's game restarted when over."""
+    trace = []
+    for step_actions in actions:
+        reward, over = game.step(step_actions, rngs)
+        trace.append((game.observe(), reward.copy(), over.copy(), game.infos()))
+        for env in np.flatnonzero(over):
+            game.new_game(env, rngs[env])
+    return trace
+
+
+@pytest.mark.parametrize("action_type", ["discrete", "multibinary"])
+def test_a_batch_of_games_is_bitwise_the_single_games(action_type):
+    kwargs = {"action_type": action_type, "height_shaping": 0.5, "balls_per_game": 1}
+    n, steps = len(SEEDS), 1500
+    actions = random_actions(action_type, n, steps, seed=7)
+    batch = Game(CLASSIC, n_envs=n, **kwargs)
+    rngs = [np.random.default_rng(seed) for seed in SEEDS]
+    for env in range(n):
+        batch.new_game(env, rngs[env])
+    batch_trace = play(batch, rngs, actions)
+    drained = 0
+    for env, seed in enumerate(SEEDS):
+        single = Game(CLASSIC, n_envs=1, **kwargs)
+        rng = np.random.default_rng(seed)
+        single.new_game(0, rng)
+        single_trace = play(single, [rng], actions[:, env : env + 1])
+        for (obs, reward, over, info), (obs1, reward1, over1, info1) in zip(
+            batch_trace, single_trace, strict=True
+        ):
+            assert obs[env].tobytes() == obs1[0].tobytes()
+            assert reward[env].tobytes() == reward1[0].tobytes()
+            assert over[env] == over1[0]
+            for key, value in info.items():
+                assert value[env].tobytes() == info1[key][0].tobytes(), key
+            drained += int(info1["drained"][0])
+    assert drained >= n  # the games drained balls and started again: the launches are covered
+
+
+def test_snapshot_and_restore_replay_a_game_exactly():
+    game = Game(CLASSIC, n_envs=2)
+    rngs = [np.random.default_rng(seed) for seed in (1, 2)]
+    for env in range(2):
+        game.new_game(env, rngs[env])
+    actions = random_actions("discrete", 2, 900, seed=0)
+    play(game, rngs, actions[:300])
+    snapshot = game.snapshot()
+    saved_rngs = copy.deepcopy(rngs)
+    first = play(game, rngs, actions[300:])
+    game.restore(snapshot)
+    second = play(game, saved_rngs, actions[300:])
+    for (obs, reward, _, info), (obs2, reward2, _, info2) in zip(first, second, strict=True):
+        assert obs.tobytes() == obs2.tobytes()
+        assert reward.tobytes() == reward2.tobytes()
+        assert info["score"].tobytes() == info2["score"].tobytes()
+    # The snapshot is a copy: playing on did not change it.
+    assert snapshot.world.balls.tobytes() != game.world.balls.tobytes()
+
+
+def test_restore_writes_into_the_arrays_the_kernel_uses():
+    game = Game(CLASSIC, n_envs=1)
+    game.new_game(0, np.random.default_rng(0))
+    balls = game.world.state.balls
+    game.restore(game.snapshot())
+    assert game.world.state.balls is balls and game.state.world is game.world.state
+
+
+@pytest.mark.parametrize(
+    ("action_type", "actions"),
+    [
+        ("discrete", np.array([4, 0])),
+        ("discrete", np.array([-1, 0])),
+        ("discrete", np.array([0.5, 1.0])),
+        ("discrete", np.array([1, 2, 3])),
+        ("multibinary", np.array([[2, 0], [0, 0]])),
+        ("multibinary", np.array([1, 0])),
+    ],
+)
+def test_bad_actions_are_rejected_with_the_expected_form(action_type, actions):
+    game = Game(CLASSIC, n_envs=2, action_type=action_type)
+    with pytest.raises(ValueError, match=rf"invalid actions: expected .*{action_type}"):
+        game.buttons(actions)
+
+
+def test_discrete_actions_are_the_buttons_as_bits():
+    for action, buttons in enumerate(DISCRETE_BUTTONS):
+        assert discrete_action(buttons) == action
+    assert DISCRETE_BUTTONS[1].tolist() == [True, False]  # left
+    assert DISCRETE_BUTTONS[2].tolist() == [False, True]  # right
