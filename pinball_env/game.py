@@ -1,7 +1,7 @@
 """The rules of pinball over a batch of envs: actions to buttons, balls per game, launches, drains,
 score, reward, the state observation and the per-step info.
 
-Everything is vectorised over the env axis, so the single env (a Game of one) and the vector env
+Everything is vectorised over the env axis, so the single env (a Game of one) and a vector env
 (a Game of N) run the same code; the physics is the World's kernel. Everything that changes
 during play is in one record, :class:`GameState`, so that a game can be snapshotted and restored
 as one object.

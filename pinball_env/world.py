@@ -2,7 +2,7 @@
 
 ``World`` owns the preallocated arrays the kernel writes in place (built by
 :func:`~pinball_env.physics.make_state` and :func:`~pinball_env.physics.make_scratch` from the
-packed table). The single env is a World of one; the vector env is a World of N calling the same
+packed table). The single env is a World of one; a vector env is a World of N calling the same
 kernel, :func:`~pinball_env.physics.step_world`. Physics backends swap :meth:`World._advance`.
 """
 
