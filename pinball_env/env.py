@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pinball_env.game import DISCRETE_BUTTONS, Game, check_choice
+from pinball_env.game import DISCRETE_BUTTONS, Game, InvalidActions, check_choice
 from pinball_env.render import Renderer, Window, render_size
 from pinball_env.table import BUTTONS, Table, load_table
 
@@ -180,11 +180,12 @@ class PinballEnv(gym.Env):
         return self._observe(), self.game.info(0)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        if not self.action_space.contains(action):
+        try:  # the game checks the action, before anything changes
+            reward, game_over = self.game.step(np.asarray(action)[None], [self.np_random])
+        except InvalidActions:
             raise ValueError(
                 f"invalid action {action!r}: expected an element of {self.action_space}"
-            )
-        reward, game_over = self.game.step(np.asarray(action)[None], [self.np_random])
+            ) from None
         if self.render_mode == "human":
             self.render()
         return self._observe(), float(reward[0]), bool(game_over[0]), False, self.game.info(0)

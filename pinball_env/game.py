@@ -30,6 +30,10 @@ DISCRETE_BUTTONS = (np.arange(2 ** len(BUTTONS))[:, None] >> np.arange(len(BUTTO
 RESET_OPTIONS = ("ball_position", "ball_velocity")
 
 
+class InvalidActions(ValueError):
+    """Actions that are not in the game's action space (raised before anything changes)."""
+
+
 def discrete_action(buttons: Sequence[bool]) -> int:
     """The discrete action that holds ``buttons`` (one bool per entry of ``BUTTONS``)."""
     return sum(int(bool(held)) << i for i, held in enumerate(buttons))
@@ -184,7 +188,7 @@ class Game:
             if actions.shape == shape and np.all((actions == 0) | (actions == 1)):
                 return actions.astype(bool)
             expected = f"{shape} zeros and ones"
-        raise ValueError(
+        raise InvalidActions(
             f"invalid actions: expected {expected} for action_type={self.action_type!r}, "
             f"got shape {actions.shape} dtype {actions.dtype}"
         )
@@ -201,7 +205,7 @@ class Game:
         """
         buttons = self.buttons(actions)
         state, balls = self.state, self.world.balls
-        height_before = balls[:, BALL_Y].copy()
+        height_before = balls[:, BALL_Y].copy() if self.height_shaping else None
         self.world.step(buttons)
         points = self.world.frame_points()
         state.score[:] += points
@@ -327,6 +331,7 @@ __all__ = [
     "RESET_OPTIONS",
     "Game",
     "GameState",
+    "InvalidActions",
     "check_choice",
     "check_playable",
     "discrete_action",

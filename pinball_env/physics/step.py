@@ -349,9 +349,10 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     the way, respond, separate, sweep the time left), the wedge release, and the flippers
     moved to the end of the substep.
 
-    The pass loop is written out here, calling helpers that take numbers: numba counts a
-    reference to every array a compiled function receives or takes out of a tuple, and a
-    helper taking arrays in this loop costs more than the physics (measured: 4-5x slower).
+    The pass loop is written out here, calling helpers that take numbers (or that run only on
+    a contact or a crossing): numba counts a reference to every array that a compiled function
+    receives or takes out of a tuple, inlined or not, and helpers taking arrays in this loop
+    cost more than the physics (measured: 4-5x slower per ball-frame).
     """
     h = settings.dt / settings.substeps
     r = settings.radius
