@@ -416,10 +416,6 @@ def run(out: Path, trials: int = 100, free_frames: int = 600) -> dict[str, Any]:
 
 def summarise(report: dict[str, Any]) -> dict[str, Any]:
     """Agreement counts on the low-speed scenarios and the headline differences."""
-
-    def share(rows: list, engine: str) -> float:
-        return sum(agrees(row, engine, row["speed"]) for row in rows) / len(rows)
-
     low = [row for row in report["wall_bounces"] if row["speed"] <= LOW_SPEED]
     tunnel = report["tunnelling"]
     first_pymunk_miss = {
@@ -435,7 +431,37 @@ def summarise(report: dict[str, Any]) -> dict[str, Any]:
         "post hits": report["post_hits"],
         "bumper hits": report["bumper_hits"],
     }
-    shares = {name: {e: share(rows, e) for e in ENGINES} for name, rows in static.items()}
+    shares = {name: {e: _share(rows, e) for e in ENGINES} for name, rows in static.items()}
+    return {
+        "findings": _findings(report, shares, first_pymunk_miss),
+        "first_pymunk_pass_through_m_per_s": first_pymunk_miss,
+        "low_speed_wall_bounces_within_tolerance": {e: _share(low, e) for e in ENGINES},
+        "corner_hits_within_tolerance": {e: _share(report["corner_hits"], e) for e in ENGINES},
+        "post_hits_within_tolerance": {e: _share(report["post_hits"], e) for e in ENGINES},
+        "bumper_hits_within_tolerance": {e: _share(report["bumper_hits"], e) for e in ENGINES},
+        "flipper_drop_max_relative_speed_difference": max(
+            row["relative_speed_difference"] for row in report["flipper_drop"]
+        ),
+        "flipper_swing_max_relative_difference": max(
+            row["relative_difference"] for row in report["flipper_swing"]
+        ),
+        "max_pass_through": {
+            target: {e: max(tunnel[target][e]) for e in ENGINES}
+            for target in ("wall", "resting flipper", "swinging flipper")
+        },
+        "free_run_diverges_1cm_at_s": report["free_run"]["diverges_1cm_at"],
+    }
+
+
+def _share(rows: list, engine: str) -> float:
+    """Share of the scenario ``rows`` in which ``engine`` agrees with the analytic answer."""
+    return sum(agrees(row, engine, row["speed"]) for row in rows) / len(rows)
+
+
+def _findings(
+    report: dict[str, Any], shares: dict[str, dict[str, float]], first_pymunk_miss: dict
+) -> list[str]:
+    """The findings in words, each computed from the measured results."""
     static_agree = all(value == 1.0 for both in shares.values() for value in both.values())
     drops = report["flipper_drop"]
     drop_agree = all(
@@ -444,10 +470,11 @@ def summarise(report: dict[str, Any]) -> dict[str, Any]:
         for row in drops
     )
     swing_worst = max(row["relative_difference"] for row in report["flipper_swing"])
+    tunnel = report["tunnelling"]
     ours_through = max(max(tunnel[t]["swept"]) for t in first_pymunk_miss)
     g_h = abs(report["free_run"]["gravity"]) * SUBSTEP
     drift = report["free_run"]["divergence"][10]
-    findings = [
+    return [
         f"{'Agree' if static_agree else 'DISAGREE'}: share of shots within tolerance of the "
         f"analytic bounce, per engine: {shares}; pymunk sees a contact up to one substep late.",
         f"{'Agree' if drop_agree else 'DISAGREE'}: a ball dropped on a resting flipper lands "
@@ -469,28 +496,38 @@ def summarise(report: dict[str, Any]) -> dict[str, Any]:
         "one-substep detection delay separates them by "
         f"1 cm at {report['free_run']['diverges_1cm_at']} s; from there it is chaotic.",
     ]
-    return {
-        "findings": findings,
-        "first_pymunk_pass_through_m_per_s": first_pymunk_miss,
-        "low_speed_wall_bounces_within_tolerance": {e: share(low, e) for e in ENGINES},
-        "corner_hits_within_tolerance": {e: share(report["corner_hits"], e) for e in ENGINES},
-        "post_hits_within_tolerance": {e: share(report["post_hits"], e) for e in ENGINES},
-        "bumper_hits_within_tolerance": {e: share(report["bumper_hits"], e) for e in ENGINES},
-        "flipper_drop_max_relative_speed_difference": max(
-            row["relative_speed_difference"] for row in report["flipper_drop"]
-        ),
-        "flipper_swing_max_relative_difference": max(
-            row["relative_difference"] for row in report["flipper_swing"]
-        ),
-        "max_pass_through": {
-            target: {e: max(tunnel[target][e]) for e in ENGINES}
-            for target in ("wall", "resting flipper", "swinging flipper")
-        },
-        "free_run_diverges_1cm_at_s": report["free_run"]["diverges_1cm_at"],
-    }
 
 
 def print_report(report: dict[str, Any]) -> None:
+    """The report as tables on the terminal, then the summary."""
+    _print_bounces(report)
+    _print_flippers(report)
+    free = report["free_run"]
+    print(
+        f"\nFree run on the classic table ({free['frames']} frames, plunger {free['launch_speed']}"
+        f" m/s): paths differ by 1 mm after {free['diverges_1mm_at']} s, 1 cm after "
+        f"{free['diverges_1cm_at']} s"
+    )
+    tunnel = report["tunnelling"]
+    print(f"\nPass-through fraction ({tunnel['trials']} aimed shots per speed)")
+    header = "".join(f"{speed:>8g}" for speed in tunnel["speeds"])
+    print(f"{'target':>17} {'engine':>7} {header}  m/s")
+    for target in ("wall", "resting flipper", "swinging flipper"):
+        for engine in ENGINES:
+            cells = "".join(f"{100 * f:7.0f}%" for f in tunnel[target][engine])
+            print(f"{target:>17} {engine:>7} {cells}")
+    print("\nSummary")
+    for key, value in report["summary"].items():
+        if key == "findings":
+            for finding in value:
+                print(f"  - {finding}")
+        else:
+            print(f"  {key}: {value}")
+
+
+def _print_bounces(report: dict[str, Any]) -> None:
+    """Wall bounces, corner, post and bumper hits against the analytic answer."""
+
     def fmt_time(value: float | None) -> str:
         return "  miss " if value is None else f"{1e3 * value:+6.2f}"
 
@@ -518,6 +555,10 @@ def print_report(report: dict[str, Any]) -> None:
                 f"  {key} {row[key]:4.2f}: swept {100 * swept['relative_velocity_error']:7.3f}"
                 f"   pymunk {100 * pym['relative_velocity_error']:7.3f}"
             )
+
+
+def _print_flippers(report: dict[str, Any]) -> None:
+    """The flipper drop and swing scenarios, engine against engine."""
     print("\nBall dropped on a resting flipper (with gravity)")
     for row in report["flipper_drop"]:
         t, v = row["contact_time"], row["bounce_speed"]
@@ -534,27 +575,6 @@ def print_report(report: dict[str, Any]) -> None:
             f"{v['pymunk']:.3f} m/s ({100 * row['relative_difference']:.1f}%), "
             f"one-hit estimate (1+e) w r = {row['expected_about']:.3f} m/s"
         )
-    free = report["free_run"]
-    print(
-        f"\nFree run on the classic table ({free['frames']} frames, plunger {free['launch_speed']}"
-        f" m/s): paths differ by 1 mm after {free['diverges_1mm_at']} s, 1 cm after "
-        f"{free['diverges_1cm_at']} s"
-    )
-    tunnel = report["tunnelling"]
-    print(f"\nPass-through fraction ({tunnel['trials']} aimed shots per speed)")
-    header = "".join(f"{speed:>8g}" for speed in tunnel["speeds"])
-    print(f"{'target':>17} {'engine':>7} {header}  m/s")
-    for target in ("wall", "resting flipper", "swinging flipper"):
-        for engine in ENGINES:
-            cells = "".join(f"{100 * f:7.0f}%" for f in tunnel[target][engine])
-            print(f"{target:>17} {engine:>7} {cells}")
-    print("\nSummary")
-    for key, value in report["summary"].items():
-        if key == "findings":
-            for finding in value:
-                print(f"  - {finding}")
-        else:
-            print(f"  {key}: {value}")
 
 
 def plot(report: dict[str, Any], path: Path) -> None:
