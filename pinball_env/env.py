@@ -7,9 +7,10 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 
 from pinball_env.game import DISCRETE_BUTTONS, Game, InvalidActions, check_choice
-from pinball_env.render import Renderer, Window, render_size
+from pinball_env.render import Renderer, Window, render_size, scoreboard
 from pinball_env.table import BUTTONS, Table, load_table
 
 OBS_TYPES = ("state", "rgb", "grayscale")
@@ -83,12 +84,18 @@ class PinballEnv(gym.Env):
     lane at a speed drawn uniformly from the table's plunger range (2.2-3.2 m/s on ``classic``).
     ``reset(options={"ball_position": [x, y], "ball_velocity": [vx, vy]})`` (metres, metres per
     second; either key alone is allowed) puts the ball in play at that state instead, for tests
-    and curricula.
+    and curricula. The state is checked as a table file is: inside the outline, clear of every
+    element, somewhere a ball in play can get to from the plunger (not inside a slingshot, not
+    below the drain), at most 100 m/s.
 
     ## Episode End
 
     Termination: the last ball drains (the game is over). Truncation: only by the ``TimeLimit``
-    wrapper, ``max_episode_steps=7200`` (two minutes of play) for ``Pinball-v0``.
+    wrapper, ``max_episode_steps=7200`` (two minutes of play) for ``Pinball-v0``. Every game can
+    end: a ball in play that has not moved a ball radius in 10 s (resting in the shooter lane,
+    or held in a flipper's cradle) is served again from the plunger, as a real machine's ball
+    search would, without losing a ball. Stepping before the first ``reset`` raises Gymnasium's
+    ``ResetNeeded``.
 
     ``info`` (reset and step): ``ball_position``, ``ball_velocity`` (float64 arrays, m and m/s),
     ``score`` (points this game), ``balls_left``, ``events`` (scoring element name -> hits this
@@ -102,18 +109,22 @@ class PinballEnv(gym.Env):
              render_mode=None)
     ```
 
-    - ``table``: a built-in table name (``"classic"`` or ``"box"``, package data in
-      ``pinball_env/table/tables``), a path to a table YAML file, or a ``Table``.
+    - ``table``: a built-in table name (``"classic"``; the built-in tables are package data in
+      ``pinball_env/table/tables``), a path to a table YAML file, or a ``Table``. A game needs a
+      plunger, flippers, a closed outline and a drain (``"box"`` is a physics test box without
+      them).
     - ``obs_type``: ``"state"``, ``"rgb"`` or ``"grayscale"``.
     - ``action_type``: ``"discrete"`` or ``"multibinary"``.
     - ``balls``: balls per game (>= 1).
     - ``reward_scale``: reward per point.
     - ``height_shaping``: weight of the optional height shaping term (0 = off).
-    - ``image_size``: (height, width) of image observations, in pixels.
+    - ``image_size``: (height, width) of image observations, in pixels, or one int for a square.
     - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
       pymunk, for cross-checks; needs the ``crosscheck`` extra).
     - ``render_mode``: ``"human"`` (a pygame window at ``render_fps``, needs the ``render``
-      extra) or ``"rgb_array"`` (an aspect-correct uint8 HxWx3 frame, no display needed).
+      extra) or ``"rgb_array"`` (an aspect-correct uint8 HxWx3 frame, no display needed). A
+      frame shows the playfield (the ball where it drained once the game is over) and beside it
+      a scoreboard with the score and the balls left.
 
     ## Version History
 
@@ -130,14 +141,13 @@ class PinballEnv(gym.Env):
         balls: int = 3,
         reward_scale: float = 0.01,
         height_shaping: float = 0.0,
-        image_size: tuple[int, int] = (84, 84),
+        image_size: int | tuple[int, int] = (84, 84),
         physics: str = "swept",
         render_mode: str | None = None,
     ) -> None:
         check_choice("obs_type", obs_type, OBS_TYPES)
         check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
-        if len(image_size) != 2 or min(image_size) < 16:
-            raise ValueError(f"image_size must be (height, width), each >= 16, got {image_size}")
+        self.image_size = _image_size(image_size)
         self.table = table if isinstance(table, Table) else load_table(table)
         self.game = Game(
             self.table, n_envs=1, balls_per_game=balls, action_type=action_type,
@@ -145,8 +155,6 @@ class PinballEnv(gym.Env):
         )  # fmt: skip
         self.obs_type = obs_type
         self.action_type = action_type
-        self.reward_scale = self.game.reward_scale
-        self.height_shaping = self.game.height_shaping
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.table.simulation.frame_rate}
 
@@ -154,7 +162,6 @@ class PinballEnv(gym.Env):
             self.action_space = spaces.Discrete(len(DISCRETE_BUTTONS))
         else:
             self.action_space = spaces.MultiBinary(len(BUTTONS))
-        self.image_size = (int(image_size[0]), int(image_size[1]))
         if obs_type == "state":
             low, high = self.game.observation_bounds()
             self.observation_space = spaces.Box(low, high, dtype=np.float32)
@@ -165,6 +172,7 @@ class PinballEnv(gym.Env):
             self.observation_space = spaces.Box(0, 255, shape, dtype=np.uint8)
             height, width = self.image_size
             self._obs_renderer = Renderer(self.table, width, height)
+        self._reset_done = False
         self._frame_renderer: Renderer | None = None
         self._window: Window | None = None
 
@@ -175,11 +183,14 @@ class PinballEnv(gym.Env):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         self.game.new_game(0, self.np_random, options)
+        self._reset_done = True
         if self.render_mode == "human":
             self.render()
         return self._observe(), self.game.info(0)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if not self._reset_done:
+            raise ResetNeeded("call reset() before step(): no game has started")
         try:  # the game checks the action, before anything changes
             reward, game_over = self.game.step(np.asarray(action)[None], [self.np_random])
         except InvalidActions:
@@ -199,7 +210,13 @@ class PinballEnv(gym.Env):
             return None
         if self._frame_renderer is None:
             self._frame_renderer = Renderer(self.table, *render_size(self.table))
-        frame = self._frame_renderer.frame(*self._moving_parts())
+        # The frame shows the ball where it drained after the last one, and a scoreboard.
+        world = self.game.world
+        playfield = self._frame_renderer.frame(
+            tuple(world.balls[0, :2]), world.state.flipper_angle[0]
+        )
+        board = scoreboard(playfield.shape[0], self.game.score[0], self.game.balls_left[0])
+        frame = np.concatenate([playfield, board], axis=1)
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:
@@ -218,6 +235,16 @@ class PinballEnv(gym.Env):
         state["_window"] = None
         return state
 
+    @property
+    def reward_scale(self) -> float:
+        """Reward per point (the game's)."""
+        return self.game.reward_scale
+
+    @property
+    def height_shaping(self) -> float:
+        """Weight of the height shaping term (the game's)."""
+        return self.game.height_shaping
+
     # --- helpers ----------------------------------------------------------------------------
 
     def _moving_parts(self) -> tuple[tuple[float, float] | None, np.ndarray]:
@@ -231,3 +258,19 @@ class PinballEnv(gym.Env):
         if self.obs_type == "rgb":
             return self._obs_renderer.frame(*self._moving_parts())
         return self._obs_renderer.grayscale(*self._moving_parts())
+
+
+def _image_size(size: object) -> tuple[int, int]:
+    """(height, width) from an int (a square) or a pair of ints, each >= 16."""
+    pair = (size, size) if isinstance(size, (int, np.integer)) else size
+    valid = (
+        isinstance(pair, (tuple, list))
+        and len(pair) == 2
+        and all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) for n in pair)
+        and min(pair) >= 16
+    )
+    if not valid:
+        raise ValueError(
+            f"image_size must be an int or (height, width) ints, each >= 16, got {size!r}"
+        )
+    return int(pair[0]), int(pair[1])

@@ -28,6 +28,10 @@ ACTION_TYPES = ("discrete", "multibinary")
 # 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's buttons.
 DISCRETE_BUTTONS = (np.arange(2 ** len(BUTTONS))[:, None] >> np.arange(len(BUTTONS))) & 1 == 1
 RESET_OPTIONS = ("ball_position", "ball_velocity")
+# Ball search: a ball in play that has not moved a ball radius in this long [s] (resting in the
+# shooter lane, say, or held in a flipper's cradle) is served again from the plunger, as a real
+# machine's ball search and auto-plunger would; no ball is lost. So every game can end.
+BALL_SEARCH_TIME = 10.0
 
 
 class InvalidActions(ValueError):
@@ -48,6 +52,8 @@ class GameState(NamedTuple):
     drain_height: np.ndarray  # (N,) float64: where the last drained ball crossed the drain [m]
     points: np.ndarray  # (N,) int64: points of the last step
     drained: np.ndarray  # (N,) bool: a ball drained in the last step
+    anchor: np.ndarray  # (N, 2) float64: where the ball was when it last moved a radius [m]
+    still_frames: np.ndarray  # (N,) int64: frames since then (see BALL_SEARCH_TIME)
 
 
 class Game:
@@ -100,7 +106,10 @@ class Game:
             drain_height=np.zeros(n_envs),
             points=np.zeros(n_envs, dtype=np.int64),
             drained=np.zeros(n_envs, dtype=bool),
+            anchor=np.zeros((n_envs, 2)),
+            still_frames=np.zeros(n_envs, dtype=np.int64),
         )
+        self.ball_search_frames = round(BALL_SEARCH_TIME * table.simulation.frame_rate)
         rest = self.world.geometry.flippers[:, FLIPPER_REST_ANGLE]
         up = np.radians([f.up_angle for f in table.flippers])
         self._rest = rest
@@ -156,6 +165,8 @@ class Game:
             position, velocity = check_ball_state(self.table, position, velocity, "reset options")
         self.world.rest_flippers(env)
         state = self.state
+        state.world.hits[env] = 0  # the reset's info shows no events of the last game
+        state.world.contact_count[env] = 0
         state.balls_left[env] = self.balls_per_game
         state.score[env] = 0
         state.points[env] = 0
@@ -163,11 +174,18 @@ class Game:
         self.launch(env, rng)
         if options:
             self.world.place_ball(env, position, velocity)
+            self._moved(env)
 
     def launch(self, env: int, rng: np.random.Generator) -> None:
         """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range."""
         low, high = self.table.plunger.speed
         self.world.launch(env, float(rng.uniform(low, high)))
+        self._moved(env)
+
+    def _moved(self, env: int) -> None:
+        """Restart env ``env``'s ball-search clock where its ball is now."""
+        self.state.anchor[env] = self.world.balls[env, [BALL_X, BALL_Y]]
+        self.state.still_frames[env] = 0
 
     def buttons(self, actions: Any) -> np.ndarray:
         """The (n_envs, len(BUTTONS)) bool buttons held by ``actions``: (n_envs,) integers for
@@ -176,7 +194,7 @@ class Game:
         if self.action_type == "discrete":
             valid = (
                 actions.shape == (self.n_envs,)
-                and actions.dtype.kind in "iu"
+                and actions.dtype.kind in "biu"  # Gymnasium's Discrete takes True as 1
                 and actions.min() >= 0
                 and actions.max() < len(DISCRETE_BUTTONS)
             )
@@ -215,6 +233,7 @@ class Game:
         state.balls_left[:] -= drained
         for env in np.flatnonzero(drained & (state.balls_left > 0)):
             self.launch(env, rngs[env])
+        self._search_balls(rngs)
         state.points[:] = points
         state.drained[:] = drained
         reward = points * self.reward_scale
@@ -223,6 +242,20 @@ class Game:
             height_after = np.where(drained, state.drain_height, balls[:, BALL_Y])
             reward += self.height_shaping * (height_after - height_before) / self.table.height
         return reward, state.balls_left == 0
+
+    def _search_balls(self, rngs: Sequence[np.random.Generator]) -> None:
+        """Ball search (see BALL_SEARCH_TIME): serve again every ball in play that has not
+        moved a ball radius for that long."""
+        state = self.state
+        offset = self.world.balls[:, [BALL_X, BALL_Y]] - state.anchor
+        moved = np.einsum("ij,ij->i", offset, offset) > self.table.ball.radius**2
+        moved |= ~self.world.active  # a game that is over waits for its reset
+        state.still_frames[:] += 1
+        state.still_frames[moved] = 0
+        state.anchor[moved] = self.world.balls[moved][:, [BALL_X, BALL_Y]]
+        if state.still_frames.max() >= self.ball_search_frames:
+            for env in np.flatnonzero(state.still_frames >= self.ball_search_frames):
+                self.launch(env, rngs[env])
 
     # --- what the agent sees ------------------------------------------------------------------
 

@@ -6,6 +6,7 @@ packed table). The single env is a World of one; a vector env is a World of N ca
 kernel, :func:`~pinball_env.physics.step_world`. Physics backends swap :meth:`World._advance`.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +23,10 @@ from pinball_env.physics.columns import (
     FLIPPER_REST_ANGLE,
 )
 from pinball_env.table import BUTTONS, Table
+
+# Fastest ball World.place_ball accepts [m/s]: far beyond any table (tables and resets allow
+# 100 m/s; the property tests fire balls at up to 1 km/s), well inside exact arithmetic.
+MAX_PLACE_SPEED = 1e4
 
 
 @dataclass(frozen=True)
@@ -74,7 +79,21 @@ class World:
     def place_ball(
         self, env: int, position: tuple[float, float], velocity: tuple[float, float] = (0.0, 0.0)
     ) -> None:
-        """Put env ``env``'s ball in play at ``position`` [m] with ``velocity`` [m/s], no spin."""
+        """Put env ``env``'s ball in play at ``position`` [m] with ``velocity`` [m/s], no spin.
+
+        Raises ValueError for a non-finite position or velocity, or a speed above
+        MAX_PLACE_SPEED. (This is the physics API: tables and resets check more, see
+        ``table.check_ball_state``.)
+        """
+        (x, y), (vx, vy) = position, velocity
+        if not all(math.isfinite(value) for value in (x, y, vx, vy)):
+            raise ValueError(
+                f"ball state must be finite, got position {position}, velocity {velocity}"
+            )
+        if math.hypot(vx, vy) > MAX_PLACE_SPEED:
+            raise ValueError(
+                f"ball speed {math.hypot(vx, vy):g} m/s is above {MAX_PLACE_SPEED:g} m/s"
+            )
         ball = self.state.balls[env]
         ball[:] = 0.0
         ball[BALL_X], ball[BALL_Y] = position
@@ -112,11 +131,14 @@ class World:
             if pressed.dtype != np.bool_ and not np.all((pressed == 0) | (pressed == 1)):
                 raise ValueError(f"buttons must be booleans or 0/1, got dtype {pressed.dtype}")
             self.state.flipper_command[:] = pressed[:, self._flipper_buttons]
-        self._advance()
+        if self._advance():
+            bad = np.flatnonzero(~np.isfinite(self.state.balls).all(axis=1)).tolist()
+            raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
 
-    def _advance(self) -> None:
-        """One frame of physics on the state arrays: the swept-collision kernel."""
-        step_world(self.geometry, self.settings, self.state, self.scratch)
+    def _advance(self) -> int:
+        """One frame of physics on the state arrays: the swept-collision kernel. Returns the
+        number of envs whose ball state is no longer finite."""
+        return step_world(self.geometry, self.settings, self.state, self.scratch)
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""

@@ -249,7 +249,8 @@ def test_reset_options_put_the_ball_where_asked():
         ({"ball_position": [0.2]}, "pair"),
         ({"ball_position": [0.03, 1.05]}, "outside the table's outline"),  # above the arch
         ({"ball_velocity": [0.0, 150.0]}, "above 100 m/s"),
-        ({"ball_position": [0.0964, 0.2585]}, "cannot be reached from the plunger"),  # a sling
+        ({"ball_position": [0.0964, 0.2585]}, "cannot be reached in play"),  # in a slingshot
+        ({"ball_position": [0.2, 0.0186]}, "cannot be reached in play"),  # below the drain
     ],
 )
 def test_bad_reset_options_are_rejected_clearly(options, message):

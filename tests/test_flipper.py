@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics import capsule_distance, respond, sweep_capsule, sweep_flipper
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
 from pinball_env.table import load_table, table_from_dict
 from pinball_env.world import World
@@ -352,9 +352,10 @@ def test_ball_dropped_on_a_resting_flipper_rolls_off_into_the_drain():
 
 
 def test_flipper_stalls_against_a_ball_wedged_under_a_lid():
-    """A ball lying on the flipper under a lid 1 mm above it: energised, the flipper cannot
-    drive the ball through the lid; like a real coil it stalls while the ball is wedged (the
-    ball squeezes out sideways, as a pinched ball does), and it drops when released."""
+    """A ball lying on the flipper under a lid 10 mm above the top of the flipper's swing (no
+    wall may cross the swing): energised, the flipper lifts the ball into the lid and cannot
+    drive it through; like a real coil it stalls while the ball is wedged, the pinched ball at
+    rest and not spinning, and it drops when released."""
     x, rest = 0.245, math.radians(-25)  # 45 mm along the flipper from its pivot (0.2, 0.3)
     low, high = 0.25, 0.4  # bisect for the height at which the ball sits on the face
     for _ in range(100):
@@ -363,18 +364,22 @@ def test_flipper_stalls_against_a_ball_wedged_under_a_lid():
             low = mid
         else:
             high = mid
-    lid = high + R + 0.001
+    swing_top = 0.3 + max(RB, L * math.sin(math.radians(25)) + RT)
+    lid = swing_top + 0.010
     world = flipper_world(extra_walls=[[[0.02, lid], [0.49, lid]]])
     world.place_ball(0, (x, high))
-    free_swing = rest + math.radians(50) / 0.022 / 60  # the angle after one unhindered frame
-    for frame in range(60):
+    up = math.radians(25)
+    stalled = 0
+    for _ in range(60):
         world.step(LEFT_UP)
         angle = world.state.flipper_angle[0, 0]
-        if frame == 0:
-            assert angle < free_swing - math.radians(10)  # held back by the wedged ball
+        stalled += angle < up - math.radians(1)
         assert world.balls[0, BALL_Y] <= lid - R + 1e-6  # never through the lid (skin scale)
         gap = flipper_distance(*world.balls[0, :2], 0.2, 0.3, L, RB, RT, angle)[0]
         assert gap >= R - 1e-6  # nor through the flipper
+        if angle < up - math.radians(1) and world.state.flipper_omega[0, 0] == 0.0:
+            assert world.balls[0, BALL_SPIN] == 0.0  # a pinched ball does not spin
+    assert stalled >= 1  # held back by the wedged ball for a while
     for _ in range(6):
         world.step(RELEASED)
     assert world.state.flipper_angle[0, 0] == rest  # free again once released

@@ -456,14 +456,14 @@ BAD_TABLES: dict[str, tuple[Mutation, str, str]] = {
     # out-of-range numbers
     "slope 90": (_set("slope_deg", value=90), "slope_deg", "out of range (must be [0, 90))"),
     "slope negative": (_set("slope_deg", value=-1.0), "slope_deg", "out of range"),
-    "gravity zero": (_set("gravity", value=0.0), "gravity", "out of range (must be > 0)"),
+    "gravity zero": (_set("gravity", value=0.0), "gravity", "out of range (must be (0, 100])"),
     "width negative": (_set("playfield", "width", value=-0.5), "playfield.width", "out of range"),
     "radius zero": (_set("ball", "radius", value=0), "ball.radius", "out of range"),
     "mass negative": (_set("ball", "mass", value=-0.08), "ball.mass", "out of range"),
     "restitution": (
         _set("materials", "wall", "restitution", value=1.6),
         "materials.wall.restitution",
-        "out of range (must be [0, 1.5])",
+        "out of range (must be [0, 1])",
     ),
     "friction": (
         _set("materials", "wall", "friction", value=-0.1),
@@ -479,7 +479,7 @@ BAD_TABLES: dict[str, tuple[Mutation, str, str]] = {
     "skin zero": (
         _set("simulation", "skin", value=0.0),
         "simulation.skin",
-        "(must be (0, 0.0001])",
+        "(must be [1e-08, 0.0001])",
     ),
     "skin large": (_set("simulation", "skin", value=2e-4), "simulation.skin", "out of range"),
     "resting_speed": (
@@ -620,7 +620,7 @@ BAD_CLASSIC_TABLES: dict[str, tuple[Mutation, str, str]] = {
     "negative wall score": (
         _set("walls", 8, "score", value=-10),
         "walls[8] 'left_slingshot'.score",
-        "out of range (must be >= 0)",
+        "out of range (must be [0, 1e+06])",
     ),
     "float post score": (
         _set("posts", 0, "score", value=100.5),
@@ -637,7 +637,7 @@ BAD_CLASSIC_TABLES: dict[str, tuple[Mutation, str, str]] = {
     "flipper length zero": (
         _set("flippers", 0, "length", value=0.0),
         f"{LEFT_FLIPPER}.length",
-        "out of range (must be > 0)",
+        "out of range (must be [0.01, 1])",
     ),
     "base radius negative": (
         _set("flippers", 0, "base_radius", value=-0.01),

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env.physics import capsule_face_normal, first_flipper
+from pinball_env.physics import capsule_face_normal, first_circle, first_flipper
 from pinball_env.physics.columns import (
     BALL_SPIN,
     BALL_VX,
@@ -73,9 +73,10 @@ class PymunkWorld(World):
         super().__init__(table, n_envs)
         self._spaces = [_EnvSpace(self, env) for env in range(n_envs)]
 
-    def _advance(self) -> None:
+    def _advance(self) -> int:
         for env_space in self._spaces:
             env_space.advance_frame()
+        return int((~np.isfinite(self.state.balls).all(axis=1)).sum())
 
     def __getstate__(self) -> dict[str, Any]:
         # Spaces hold callbacks into this object; they are rebuilt from the state arrays.
@@ -112,7 +113,7 @@ class _EnvSpace:
             shape.anchor = (x0, y0)
         for j, (x, y, radius) in enumerate(geometry.circles):
             shape = pymunk.Circle(static, radius, offset=(x, y))
-            self._add_element(shape, len(geometry.segments) + j, geometry.circle_props[j])
+            self._add_element(shape, first_circle(geometry) + j, geometry.circle_props[j])
         self.flipper_bodies = []
         for j, flipper in enumerate(table.flippers):
             body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)

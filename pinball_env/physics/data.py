@@ -5,8 +5,9 @@ their shapes and dtypes (as MuJoCo MJX's ``make_data`` does).
 Every per-env array has the env as its first axis, so a single env is a batch of one and a vector
 env steps N with the same kernel. Column meanings are in :mod:`pinball_env.physics.columns`.
 
-Element ids are global and ordered: segments first, then circles, flippers and sensors. The
-``first_*`` functions give the offsets; they are the only place that order is written down.
+Element ids are global and ordered: segments first, then circles, flippers and sensors, as
+``Table.pack`` lays the arrays out and ``Table.element_names`` names them. The ``first_*``
+functions give the offsets from the arrays; the kernel and the backends use them.
 They are inlined into their callers (``inline="always"``): a compiled call that receives the
 geometry tuple counts a reference to each of its arrays, which per contact costs more than the
 arithmetic.

@@ -4,15 +4,17 @@ Every state array has a leading env axis, so the single env is a batch of one an
 calls the very same kernel, :func:`step_world`, whose body for one env is :func:`step_ball`.
 Each frame of length ``dt`` is cut into fixed substeps. In a substep the flippers follow their
 commands (kinematic: a constant angular speed towards the stop the command selects, see
-:func:`flipper_schedule`), gravity updates the ball's velocity (semi-implicit Euler), then the
-ball sweeps along its straight path and stops at the earliest contact over all walls, posts and
-flippers (ties go to the lowest element id, :func:`earliest_contact`), responds, and sweeps the
-remaining time again (:func:`contact_passes`). A pass cap and a minimum-progress rule end the loop
-for a wedged ball: the rest of that substep is dropped, never skipped over, so the ball can stall
-for an instant but cannot tunnel; a flipper pushing a wedged ball stalls too, as a real coil does
-(:func:`hold_flippers_near`). Sensors (rollovers, the drain) are crossed, not collided with: a
-crossing of the ball's centre is an event, and a drain crossing takes the ball out of play
-(:func:`record_crossings`).
+:func:`flipper_motion`), gravity updates the ball's velocity (semi-implicit Euler), then the ball
+sweeps along its straight path and stops at the earliest contact over all walls, posts and
+flippers (ties go to the lowest element id: :func:`earliest_static_contact`,
+:func:`earliest_flipper_contact`), responds, and sweeps the remaining time again: the contact
+passes. A pass cap and a minimum-progress rule end the passes for a wedged ball: the rest of that
+substep is dropped, never skipped over, so the ball can stall for an instant but cannot tunnel;
+a flipper pushing a wedged ball stalls too, as a real coil does (:func:`release_wedge`). A
+flipper sweep that runs out of slices (an absurd speed) ends the substep the same way, so the
+work of a frame is bounded whatever the state. Sensors (rollovers, the drain) are crossed, not
+collided with: a crossing of the ball's centre is an event, and a drain crossing takes the ball
+out of play (:func:`record_crossings`).
 
 Contact response (per unit mass, relative to the velocity of the surface, zero except on a
 swinging flipper): the normal velocity is reflected with restitution ``e`` (``e = 0`` below
@@ -20,7 +22,8 @@ swinging flipper): the normal velocity is reflected with restitution ``e`` (``e 
 is a Coulomb impulse, at most ``mu`` times the normal impulse, that drives the slip of the
 contact point towards zero, the ball being a solid sphere (I = 2/5 m r^2) whose spin about the
 playfield normal is part of its state; kicking elements (bumpers, slingshots) then add ``kick``
-along the normal. After a contact the ball is put ``skin`` off the surface (:func:`separate`).
+along the normal. After a contact the ball is put ``skin`` off the surface (the separation,
+measured by :func:`surface_distance`).
 """
 
 import math
@@ -237,7 +240,7 @@ def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_o
         )  # fmt: skip
         if t < best_t:
             best_t, best_nx, best_ny, best = t, nx, ny, j
-    offset = segments.shape[0]
+    offset = segments.shape[0]  # first_circle: the circles' ids follow the segments'
     for j in range(circles.shape[0]):
         t, nx, ny = sweep_circle(x, y, dx, dy, r, circles[j, 0], circles[j, 1], circles[j, 2])
         if t < best_t:
@@ -343,16 +346,18 @@ def release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held):
 @njit(cache=True, inline="always")
 def step_ball(geometry, settings, state, scratch, env, flipper_id):
     """Advance env ``env`` by one frame in place: its flippers, and its ball if in play.
+    Returns whether the ball's state is finite afterwards.
 
     ``flipper_id`` is the first flipper's element id. Per substep: the flipper schedule,
     gravity, the contact passes (sweep to the earliest contact, count the sensors crossed on
     the way, respond, separate, sweep the time left), the wedge release, and the flippers
     moved to the end of the substep.
 
-    The pass loop is written out here, calling helpers that take numbers (or that run only on
-    a contact or a crossing): numba counts a reference to every array that a compiled function
-    receives or takes out of a tuple, inlined or not, and helpers taking arrays in this loop
-    cost more than the physics (measured: 4-5x slower per ball-frame).
+    The pass loop is written out here, calling the sweeps over the table's arrays and helpers
+    that take numbers (or that run only on a contact or a crossing): numba counts a reference
+    to every array that a compiled function receives or takes out of a tuple, inlined or not,
+    and more helpers taking arrays in this loop cost more than the physics (measured: 4-5x
+    slower per ball-frame).
     """
     h = settings.dt / settings.substeps
     r = settings.radius
@@ -394,6 +399,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided, circles
                 )
                 svx = svy = 0.0
+                cut = False
                 if n_flippers > 0:
                     tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
                         x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops, tol
@@ -401,6 +407,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     if tau < t * remaining:  # a tie goes to the wall or post (lower id)
                         t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
                         element = flipper_id + flipper
+                        cut = fnx == 0.0 and fny == 0.0  # the sweep ran out of slices
                 used = remaining * min(t, 1.0)
                 # Sensor crossings on the way to the contact (or to the end of the substep),
                 # after a cheap test that rules out the common case.
@@ -422,7 +429,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 x += vx * used
                 y += vy * used
                 remaining -= used
-                if element < 0:
+                if element < 0 or cut:  # a cut drops the rest of the substep, as a wedge does
                     break
                 props = element_props(element, geometry)
                 vx, vy, spin, speed = respond(
@@ -449,8 +456,12 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             if remaining > 0.0 and state.active[env]:
                 held_time = h - remaining
                 pinched = release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held)
-                if pinched:  # the pinched ball is at rest, and its pinch is no hit
-                    vx = vy = 0.0
+                if pinched:
+                    # The pinched ball is at rest, and its pinch is no hit. The flipper that
+                    # pinches it stays where it started the substep: moving on to where it met
+                    # the ball would squeeze the ball a little further into the wall each time.
+                    vx = vy = spin = 0.0
+                    stops[pusher] = 0.0
             if not pinched:
                 for n in range(n_hits):
                     state.hits[env, hit_elements[n]] += 1
@@ -461,15 +472,21 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             )
     ball[BALL_X], ball[BALL_Y] = x, y
     ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
+    return math.isfinite(x + y + vx + vy + spin)
 
 
 @njit(cache=True)
 def step_world(geometry, settings, state, scratch):
     """Advance every env by one frame ``settings.dt`` in place, logging contacts and hits.
+    Returns the number of envs whose ball state is not finite after the frame (0 for any
+    valid table and state; the caller reports the others).
 
     Envs are independent: each reads and writes only its own rows of ``state`` and
     ``scratch`` (so this loop can run in parallel).
     """
     flipper_id = first_flipper(geometry)
+    faults = 0
     for env in range(state.balls.shape[0]):
-        step_ball(geometry, settings, state, scratch, env, flipper_id)
+        if not step_ball(geometry, settings, state, scratch, env, flipper_id):
+            faults += 1
+    return faults

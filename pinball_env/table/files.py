@@ -18,6 +18,8 @@ from pinball_env.table.model import Table
 from pinball_env.table.schema import TableError, table_from_dict, table_to_dict
 
 SUFFIXES = (".yaml", ".yml")
+# Largest table file read [bytes]: the classic table is 8 KB.
+MAX_TABLE_BYTES = 1 << 20
 
 
 def builtin_tables_dir() -> Path:
@@ -62,12 +64,26 @@ def load_table(name_or_path: str | os.PathLike[str]) -> Table:
     if not path.is_file():
         raise TableError(f"{source}: table file not found")
     try:
+        size = path.stat().st_size
+        if size > MAX_TABLE_BYTES:
+            raise TableError(
+                f"{source}: {size} bytes, a table file may have at most {MAX_TABLE_BYTES}"
+            )
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=_StrictLoader)
     except yaml.YAMLError as exc:
-        raise TableError(f"{source}: invalid YAML: {exc}") from exc
+        raise TableError(f"{source}: invalid YAML: {_shorten(str(exc))}") from exc
     except (OSError, UnicodeDecodeError) as exc:
-        raise TableError(f"{source}: cannot read the file: {exc}") from exc
-    return table_from_dict(data, source)
+        raise TableError(f"{source}: cannot read the file: {_shorten(str(exc))}") from exc
+    except RecursionError:
+        raise TableError(f"{source}: invalid YAML: nested too deeply") from None
+    try:
+        return table_from_dict(data, source)
+    except RecursionError:
+        raise TableError(f"{source}: a value is nested too deeply") from None
+
+
+def _shorten(text: str, most: int = 300) -> str:
+    return text if len(text) <= most else text[:most] + " ..."
 
 
 def dump_table(table: Table, path: str | os.PathLike[str]) -> Path:

@@ -185,14 +185,15 @@ class Table:
 
     @cached_property
     def free_space(self) -> np.ndarray:
-        """Grid of where a ball centre can get to from the plunger (or the ball's start), see
-        :mod:`pinball_env.table.reachable`; computed on first use."""
+        """Grid of where a ball centre can get to in play from the plunger (or the ball's
+        start), see :mod:`pinball_env.table.reachable`; computed on first use."""
         geometry = self.pack()
         start = self.plunger.position if self.plunger is not None else self.ball.start
         two_sided = geometry.segments[~geometry.segment_one_sided]
+        drains = geometry.sensors[geometry.sensor_drain]
         return free_space(
             self.width, self.height, self.ball.radius, two_sided, geometry.circles,
-            geometry.flippers, start,
+            geometry.flippers, start, drains,
         )  # fmt: skip
 
     @property

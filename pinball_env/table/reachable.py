@@ -7,7 +7,8 @@ a radius from every two-sided wall, post and resting flipper; one-sided walls le
 one way, so they do not separate regions) and keeps the region connected to the start by a flood
 fill. The blocking radius is a cell and a half less than the ball's, so that a channel just wider
 than the ball stays open on the grid: the test separates enclosed pockets, and leaves exact
-clearance to the table's own overlap checks.
+clearance to the table's own overlap checks. Drains close the region too: a ball below the
+drain line is out of play, and one put there would never cross it.
 """
 
 import math
@@ -117,8 +118,11 @@ def free_space(
     circles: np.ndarray,
     flippers: np.ndarray,
     start: tuple[float, float],
+    drains: np.ndarray | None = None,
 ) -> np.ndarray:
-    """(rows, cols) bool grid of the CELL-sized cells a ball centre can reach from ``start``.
+    """(rows, cols) bool grid of the CELL-sized cells a ball centre can reach from ``start``
+    while in play: ``drains`` (segments, (n, 4)) are lines its centre does not cross, since
+    the ball leaves play there.
 
     Row i, column j is the cell centred on ((j + 0.5) CELL, (i + 0.5) CELL).
     """
@@ -135,6 +139,8 @@ def free_space(
         CELL,
     )
     _block_flippers(blocked, np.ascontiguousarray(flippers, dtype=np.float64), reach, CELL)
+    if drains is not None:  # a line the centre cannot cross: thick enough to close the grid
+        _block_segments(blocked, np.ascontiguousarray(drains, dtype=np.float64), CELL, CELL)
     return _flood(blocked, *cell_of(start, blocked.shape))
 
 

@@ -15,14 +15,16 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import reprlib
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import MISSING, dataclass, fields
 from functools import partial
 from typing import Any, NoReturn
 
 import numpy as np
+from numba import njit
 
-from pinball_env.physics import point_segment_distance
+from pinball_env.physics import flipper_distance, flipper_reach, point_segment_distance
 from pinball_env.table.model import (
     BUTTONS,
     Ball,
@@ -42,6 +44,23 @@ from pinball_env.table.reachable import cell_of
 # Fastest ball a table or a reset may set [m/s]: a real one rarely passes 10 m/s, and the flipper
 # contact's work grows with the speed.
 MAX_BALL_SPEED = 100.0
+# How many of each element a table may have. They bound the work of a frame (every pass sweeps
+# the ball against every segment, post and flipper) and of loading a file.
+MAX_SEGMENTS = 2048  # over all walls
+MAX_POINTS = 1024  # per wall
+MAX_POSTS = 256
+MAX_FLIPPERS = 8
+MAX_SENSORS = 256
+MAX_SCORE = 1_000_000  # points per hit
+# A wall or post must keep this far from the area a flipper sweeps [m] (the check samples the
+# swing at this resolution).
+SWING_CLEARANCE = 3e-4
+
+_short = reprlib.Repr()
+_short.maxstring = _short.maxother = 60
+_short.maxlist = _short.maxtuple = _short.maxdict = _short.maxset = 4
+_short.maxlevel = 2
+_short.maxlong = 40
 
 
 class TableError(ValueError):
@@ -59,10 +78,11 @@ class _Loc:
     path: str = ""
 
     def key(self, key: str) -> _Loc:
+        key = key if len(key) <= 60 else _short.repr(key)
         return _Loc(self.source, f"{self.path}.{key}" if self.path else key)
 
     def index(self, i: int, name: object = None) -> _Loc:
-        label = f"{self.path}[{i}]" + (f" {name!r}" if isinstance(name, str) else "")
+        label = f"{self.path}[{i}]" + (f" {_short.repr(name)}" if isinstance(name, str) else "")
         return _Loc(self.source, label)
 
     def fail(self, problem: str) -> NoReturn:
@@ -73,7 +93,16 @@ Parser = Callable[[Any, _Loc], Any]
 
 
 def _describe(value: object) -> str:
-    return f"{type(value).__name__} {value!r}"
+    """The type and a shortened repr of a value from a file: aliases in YAML can make a small
+    file hold a value whose full repr is gigabytes."""
+    return f"{type(value).__name__} {_short.repr(value)}"
+
+
+def _listing(names: Iterable[str], most: int = 12) -> str:
+    """Names for a message, sorted, each shortened, at most ``most`` of them."""
+    names = sorted(names)
+    shown = [name if len(name) <= 40 else _short.repr(name) for name in names[:most]]
+    return ", ".join(shown) + (f", ... ({len(names)} in all)" if len(names) > most else "")
 
 
 def _mapping(
@@ -86,7 +115,7 @@ def _mapping(
     allowed = sorted({*required, *optional})
     for key in value:
         if key not in allowed:
-            loc.fail(f"unknown key {key!r} (allowed: {', '.join(allowed)})")
+            loc.fail(f"unknown key {_short.repr(key)} (allowed: {', '.join(allowed)})")
     for key in required:
         if key not in value:
             loc.fail(f"missing required key {key!r}")
@@ -142,7 +171,11 @@ def _number(
         loc.fail(
             f"expected {'an integer' if integer else 'a number'}, got {_describe(value)}{hint}"
         )
-    if not math.isfinite(value):
+    try:
+        finite = math.isfinite(value)
+    except OverflowError:  # an integer too large for a float
+        loc.fail(f"{_short.repr(value)} is out of range (too large)")
+    if not finite:
         loc.fail(f"expected a finite number, got {value!r}")
     too_low = low is not None and (value <= low if open_low else value < low)
     too_high = high is not None and (value >= high if open_high else value > high)
@@ -151,7 +184,7 @@ def _number(
             interval = f"{'>' if open_low else '>='} {low:g}"
         else:
             interval = f"{'(' if open_low else '['}{low:g}, {high:g}{')' if open_high else ']'}"
-        loc.fail(f"{value!r} is out of range (must be {interval})")
+        loc.fail(f"{_short.repr(value)} is out of range (must be {interval})")
     return int(value) if integer else float(value)
 
 
@@ -216,9 +249,19 @@ def _record(
     return cls(**{key: parsers[key](raw[key], loc.key(key)) for key in raw}, **extra)
 
 
+# Physically sensible ranges. A value outside them is a typo (or an attack): it would make the
+# ball, the table or the work of a frame absurd.
 _positive = partial(_number, low=0.0, open_low=True)
 _non_negative = partial(_number, low=0.0)
-_score = partial(_number, low=0, integer=True)
+_score = partial(_number, low=0, high=MAX_SCORE, integer=True)
+_playfield_size = partial(_number, low=0.05, high=5.0)  # [m]: a real playfield is ~0.5 x 1 m
+_ball_radius = partial(_number, low=0.002, high=0.1)  # [m]: a real ball is 13.5 mm
+_ball_mass = partial(_number, low=0.001, high=10.0)  # [kg]: a real ball is 80 g
+_post_radius = partial(_number, low=0.001, high=1.0)  # [m]
+_flipper_length = partial(_number, low=0.01, high=1.0)  # [m]: a real flipper is ~70 mm
+_flipper_radius = partial(_number, low=0.001, high=0.1)  # [m]
+_kick = partial(_number, low=0.0, high=10.0)  # [m/s]: a real pop bumper adds ~1.5 m/s
+_gravity = partial(_number, low=0.0, high=100.0, open_low=True)  # [m/s^2]: Earth's 9.81
 
 # --- building a table -----------------------------------------------------------------------------
 
@@ -228,13 +271,18 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     top = _Loc(source)
     raw = _mapping(data, top, ["name", "playfield", "ball", "materials"], _TOP_KEYS)
     playfield = _mapping(raw["playfield"], top.key("playfield"), ["width", "height"])
-    width = _positive(playfield["width"], top.key("playfield").key("width"))
-    height = _positive(playfield["height"], top.key("playfield").key("height"))
+    width = _playfield_size(playfield["width"], top.key("playfield").key("width"))
+    height = _playfield_size(playfield["height"], top.key("playfield").key("height"))
     point = partial(_point, width=width, height=height)
     materials = _materials(raw["materials"], top.key("materials"))
     elements = _elements(raw, top, point, materials)
     ball_loc = top.key("ball")
-    ball_parsers = {"radius": _positive, "mass": _positive, "start": point, "velocity": _velocity}
+    ball_parsers = {
+        "radius": _ball_radius,
+        "mass": _ball_mass,
+        "start": point,
+        "velocity": _velocity,
+    }
     ball = _record(Ball, raw["ball"], ball_loc, ball_parsers)
     _check_placed(ball.start, ball.radius, elements, ball_loc.key("start"))
     return Table(
@@ -257,19 +305,26 @@ def _elements(
     post_parsers = {
         "name": _string,
         "center": point,
-        "radius": _positive,
+        "radius": _post_radius,
         "material": _string,
-        "kick": _non_negative,
+        "kick": _kick,
         "score": _score,
     }
+    post = partial(_record, Post, parsers=post_parsers)
     elements = {
-        "walls": _group(raw, top, "walls", partial(_wall, point=point)),
-        "posts": _group(raw, top, "posts", partial(_record, Post, parsers=post_parsers)),
-        "flippers": _group(raw, top, "flippers", partial(_flipper, point=point)),
-        "sensors": _group(raw, top, "sensors", partial(_sensor, point=point)),
+        "walls": _group(raw, top, "walls", partial(_wall, point=point), MAX_SEGMENTS),
+        "posts": _group(raw, top, "posts", post, MAX_POSTS),
+        "flippers": _group(raw, top, "flippers", partial(_flipper, point=point), MAX_FLIPPERS),
+        "sensors": _group(raw, top, "sensors", partial(_sensor, point=point), MAX_SENSORS),
     }
+    n_segments = sum(len(wall.segments()) for wall in elements["walls"])
+    if n_segments > MAX_SEGMENTS:
+        top.key("walls").fail(f"{n_segments} segments in all, at most {MAX_SEGMENTS} allowed")
     _check_elements(elements, materials, top)
+    _check_kickers(elements, materials, top)
+    _check_outline(elements["walls"], top)
     _check_pivots(elements["flippers"], elements["walls"], top)
+    _check_swings(elements, top)
     return elements
 
 
@@ -292,14 +347,14 @@ def _options(
             raw["slope_deg"], top.key("slope_deg"), 0.0, 90.0, open_high=True
         )
     if "gravity" in raw:
-        options["gravity"] = _positive(raw["gravity"], top.key("gravity"))
+        options["gravity"] = _gravity(raw["gravity"], top.key("gravity"))
     if "simulation" in raw:
         simulation_parsers = {
             "frame_rate": partial(_number, low=1.0, high=1000.0),
-            "substeps": partial(_number, low=1, high=1000, integer=True),
-            "max_passes": partial(_number, low=1, high=1000, integer=True),
-            "skin": partial(_number, low=0.0, high=1e-4, open_low=True),
-            "resting_speed": _non_negative,
+            "substeps": partial(_number, low=1, high=100, integer=True),
+            "max_passes": partial(_number, low=1, high=100, integer=True),
+            "skin": partial(_number, low=1e-8, high=1e-4),  # [m]
+            "resting_speed": partial(_number, low=0.0, high=1.0),  # [m/s]
         }
         options["simulation"] = _record(
             Simulation, raw["simulation"], top.key("simulation"), simulation_parsers
@@ -372,17 +427,23 @@ def _name_of(item: object) -> object:
     return item.get("name") if isinstance(item, Mapping) else None
 
 
-def _group(raw: Mapping[str, Any], top: _Loc, key: str, parse: Parser) -> tuple[Any, ...]:
-    """The optional list ``raw[key]`` of elements, each parsed at its path ``key[i] 'name'``."""
-    items = _list(raw.get(key, []), top.key(key))
+def _group(
+    raw: Mapping[str, Any], top: _Loc, key: str, parse: Parser, max_len: int
+) -> tuple[Any, ...]:
+    """The optional list ``raw[key]`` of at most ``max_len`` elements, each parsed at its path
+    ``key[i] 'name'``."""
+    items = _list(raw.get(key, []), top.key(key), max_len=max_len)
     return tuple(parse(item, top.key(key).index(i, _name_of(item))) for i, item in enumerate(items))
 
 
 def _materials(value: object, loc: _Loc) -> tuple[Material, ...]:
     if not isinstance(value, Mapping) or not value:
         loc.fail(f"expected a mapping of at least one material, got {_describe(value)}")
+    if len(value) > MAX_POSTS:
+        loc.fail(f"{len(value)} materials, at most {MAX_POSTS} allowed")
     parsers = {
-        "restitution": partial(_number, low=0.0, high=1.5),
+        # At most 1: a bounce never adds energy (kicks do, see _check_kickers).
+        "restitution": partial(_number, low=0.0, high=1.0),
         "friction": partial(_number, low=0.0, high=2.0),
     }
     return tuple(
@@ -398,11 +459,11 @@ def _wall(value: object, loc: _Loc, point: Parser) -> Wall:
         loc,
         {
             "name": _string,
-            "points": partial(_points, point=point, min_len=2),
+            "points": partial(_points, point=point, min_len=2, max_len=MAX_POINTS),
             "closed": _flag,
             "material": _string,
             "one_sided": _flag,
-            "kick": _non_negative,
+            "kick": _kick,
             "score": _score,
         },
     )
@@ -421,9 +482,9 @@ def _flipper(value: object, loc: _Loc, point: Parser) -> Flipper:
         {
             "name": _string,
             "pivot": point,
-            "length": _positive,
-            "base_radius": _positive,
-            "tip_radius": _positive,
+            "length": _flipper_length,
+            "base_radius": _flipper_radius,
+            "tip_radius": _flipper_radius,
             "rest_angle": angle,
             "up_angle": angle,
             "stroke_time": partial(_number, low=0.005, high=0.2),
@@ -482,13 +543,99 @@ def _check_elements(
         for i, element in enumerate(elements):
             loc = top.key(group).index(i, element.name)
             if element.name in seen:
-                loc.fail(f"duplicate element name {element.name!r} (also {seen[element.name]})")
+                name = _short.repr(element.name)
+                loc.fail(f"duplicate element name {name} (also {seen[element.name]})")
             seen[element.name] = loc.path
             material = getattr(element, "material", None)  # sensors have none
             if material is not None and material not in known:
                 loc.key("material").fail(
-                    f"unknown material {material!r} (known: {', '.join(sorted(known))})"
+                    f"unknown material {_short.repr(material)} (known: {_listing(known)})"
                 )
+
+
+def _check_kickers(
+    groups: Mapping[str, tuple[Any, ...]], materials: tuple[Material, ...], top: _Loc
+) -> None:
+    """A kicking wall or post bounces with restitution below 1: a kick adds speed at every hit,
+    and only a lossy bounce keeps that bounded (at kick / (1 - restitution))."""
+    restitution = {m.name: m.restitution for m in materials}
+    for group in ("walls", "posts"):
+        for i, element in enumerate(groups[group]):
+            if element.kick > 0.0 and restitution[element.material] >= 1.0:
+                top.key(group).index(i, element.name).fail(
+                    f"a kicker needs a material with restitution < 1, got "
+                    f"{_short.repr(element.material)} with {restitution[element.material]:g} "
+                    "(the ball would gain speed at every hit, without bound)"
+                )
+
+
+def _check_outline(walls: tuple[Wall, ...], top: _Loc) -> None:
+    """The outline (the closed wall enclosing the largest area) is two-sided: a one-sided one
+    lets the ball through one way, out of the table."""
+    outline = enclosure(walls)
+    if outline is not None and outline.one_sided:
+        i = walls.index(outline)
+        top.key("walls").index(i, outline.name).key("one_sided").fail(
+            "the table's outline (its largest closed wall) must be two-sided, or the ball "
+            "leaves the table through it"
+        )
+
+
+def _check_swings(groups: Mapping[str, tuple[Any, ...]], top: _Loc) -> None:
+    """No wall or post lies across the area a flipper sweeps between its stops (or within
+    SWING_CLEARANCE of it): a rising flipper would hit a ball through it."""
+    walls, posts = groups["walls"], groups["posts"]
+    segments = np.array([s for _, _, s in _wall_segments(walls)], dtype=np.float64).reshape(-1, 4)
+    circles = np.array([(*p.center, p.radius) for p in posts], dtype=np.float64).reshape(-1, 3)
+    owners = [f"wall {_short.repr(w.name)} segment {j}" for w, j, _ in _wall_segments(walls)]
+    owners += [f"post {_short.repr(p.name)}" for p in posts]
+    for i, flipper in enumerate(groups["flippers"]):
+        gap, element = _swing_clearance(
+            *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
+            math.radians(flipper.rest_angle), math.radians(flipper.up_angle), segments,
+            circles, SWING_CLEARANCE / 2.0,
+        )  # fmt: skip
+        if gap < SWING_CLEARANCE:
+            top.key("flippers").index(i, flipper.name).fail(
+                f"{owners[element]} lies in the flipper's swing (or within "
+                f"{1e3 * SWING_CLEARANCE:g} mm of it): a rising flipper would hit a ball "
+                "through it"
+            )
+
+
+@njit(cache=True)
+def _swing_clearance(px, py, length, rb, rt, a0, a1, segments, circles, step):
+    """Smallest distance between a flipper swinging from angle a0 to a1 and the segments and
+    circles, sampled so that the true distance is at most ``2 step`` less (points along the
+    segments every ``step``, angles every ``step`` of arc at the flipper's reach). Returns
+    ``(distance, element)``, segments first then circles (``inf, -1`` when out of reach)."""
+    reach = flipper_reach(length, rb, rt)
+    n_angles = int(abs(a1 - a0) * reach / step) + 2
+    best = math.inf
+    best_element = -1
+    for k in range(segments.shape[0]):
+        x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
+        if point_segment_distance(px, py, x0, y0, x1, y1) > reach + step:
+            continue
+        n_points = int(math.hypot(x1 - x0, y1 - y0) / step) + 2
+        for i in range(n_points):
+            s = i / (n_points - 1)
+            x = x0 + s * (x1 - x0)
+            y = y0 + s * (y1 - y0)
+            if math.hypot(x - px, y - py) > reach + step:
+                continue
+            for n in range(n_angles):
+                angle = a0 + (a1 - a0) * n / (n_angles - 1)
+                d, _, _ = flipper_distance(x, y, px, py, length, rb, rt, angle)
+                if d < best:
+                    best, best_element = d, k
+    for k in range(circles.shape[0]):
+        for n in range(n_angles):
+            angle = a0 + (a1 - a0) * n / (n_angles - 1)
+            d, _, _ = flipper_distance(circles[k, 0], circles[k, 1], px, py, length, rb, rt, angle)
+            if d - circles[k, 2] < best:
+                best, best_element = d - circles[k, 2], segments.shape[0] + k
+    return best, best_element
 
 
 def _wall_segments(
@@ -565,8 +712,8 @@ def check_ball_state(
     _check_placed(point, table.ball.radius, elements, where.key("ball_position"))
     if not table.free_space[cell_of(point, table.free_space.shape)]:
         where.key("ball_position").fail(
-            f"({point[0]:g}, {point[1]:g}) cannot be reached from the plunger: it is walled off "
-            "(inside a slingshot, say)"
+            f"({point[0]:g}, {point[1]:g}) cannot be reached in play from the plunger: it is "
+            "walled off (inside a slingshot, say) or below a drain"
         )
     return point, _velocity(velocity, where.key("ball_velocity"))
 

@@ -39,7 +39,7 @@ import numpy as np
 from pinball_env.backends import make_world
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
-from pinball_env.table import Table, load_table, table_from_dict, table_to_dict
+from pinball_env.table import BUTTONS, Table, load_table, table_from_dict, table_to_dict
 from pinball_env.world import World
 
 ENGINES = ("swept", "pymunk")
@@ -63,8 +63,9 @@ def classic_left_flipper() -> dict[str, Any]:
     return {**left, "name": "flipper", "pivot": [0.4, 0.4], "material": "flipper"}
 
 
-# Flipper used by the flipper scenarios.
+# Flipper used by the flipper scenarios, and the buttons (one env) that raise it.
 FLIPPER = classic_left_flipper()
+LEFT_BUTTON = np.array([[button == FLIPPER["button"] for button in BUTTONS]])
 
 
 def scenario_table(
@@ -272,7 +273,7 @@ def flipper_swing(alongs: list[float]) -> list:
     axis = np.array([math.cos(angle), math.sin(angle)])
     normal = np.array([-math.sin(angle), math.cos(angle)])
     omega = math.radians(abs(FLIPPER["up_angle"] - FLIPPER["rest_angle"])) / FLIPPER["stroke_time"]
-    buttons = np.array([[True, False]])
+    buttons = LEFT_BUTTON
     for along in alongs:
         gap = flipper_distance(*(pivot + along * axis + 0.05 * normal), *pivot,
                                FLIPPER["length"], FLIPPER["base_radius"], FLIPPER["tip_radius"],
@@ -344,7 +345,7 @@ def tunnelling(speeds: list[float], trials: int, seed: int = 0) -> dict[str, Any
     mid_axis, mid_normal = pose(0.5 * (rest + up))
     _, up_normal = pose(up)
     length = FLIPPER["length"]
-    swing_buttons = np.array([[True, False]])
+    swing_buttons = LEFT_BUTTON
     # name: (table, first aim point, axis, normal at the shot, a point of the target's line and
     #        its normal at the end, aimed span, largest tilt, buttons, arrival time)
     targets = {
