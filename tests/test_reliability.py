@@ -1,0 +1,370 @@
+"""No accepted table, reset or action can hang, blow up or leak the ball.
+
+For any table that ``load_table`` accepts, any reset options it accepts and any valid actions,
+every step returns within a bounded time, the state stays finite, the ball stays inside the
+outline and never ends a frame overlapping a wall, post or flipper by more than the skin, and
+every game can end. These tests cover each defect found when this promise was first tried.
+"""
+
+import copy
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import yaml
+from gymnasium.error import ResetNeeded
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import pinball_env  # noqa: F401  (registers Pinball-v0)
+from pinball_env.game import BALL_SEARCH_TIME, Game
+from pinball_env.physics import flipper_distance, point_segment_distance
+from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY
+from pinball_env.render import SCOREBOARD_WIDTH, render_size, text_mask
+from pinball_env.table import TableError, builtin_tables_dir, load_table, table_from_dict
+from pinball_env.table.model import inside
+from pinball_env.world import World
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def classic_dict() -> dict:
+    return yaml.safe_load((builtin_tables_dir() / "classic.yaml").read_text())
+
+
+def box_dict() -> dict:
+    return yaml.safe_load((builtin_tables_dir() / "box.yaml").read_text())
+
+
+def assert_sound(world: World) -> None:
+    """The invariants of every frame: finite, inside the outline, overlapping no two-sided
+    wall, post or flipper by more than the skin."""
+    table, state = world.table, world.state
+    r, skin = table.ball.radius, table.simulation.skin
+    assert np.isfinite(state.balls).all()
+    outline = table.outline
+    for env in np.flatnonzero(state.active):
+        x, y = state.balls[env, :2]
+        if outline is not None:
+            assert inside((x, y), outline.points), (env, x, y)
+        for wall in table.walls:
+            if wall.one_sided:  # a ball may lie partly through a gate
+                continue
+            for segment in wall.segments():
+                gap = point_segment_distance(x, y, *segment) - r
+                assert gap >= -skin * 1.001, (env, wall.name, gap)
+        for post in table.posts:
+            gap = math.dist((x, y), post.center) - post.radius - r
+            assert gap >= -skin * 1.001, (env, post.name, gap)
+        for j, flipper in enumerate(table.flippers):
+            angle = state.flipper_angle[env, j]
+            gap = flipper_distance(
+                x, y, *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius, angle
+            )[0]
+            assert gap - r >= -skin * 1.001, (env, flipper.name, gap - r)
+
+
+# --- 1. energy and work are bounded ----------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "message"),
+    [
+        (("materials", "wall", "restitution"), 1.5, "restitution: 1.5 is out of range"),
+        (("posts", 0, "kick"), 1.0e300, "kick: 1e+300 is out of range"),
+        (("simulation", "skin"), 1.0e-300, "skin: 1e-300 is out of range"),
+        (("gravity",), 1.0e300, "gravity: 1e+300 is out of range"),
+        (("ball", "radius"), 1.0e-300, "radius: 1e-300 is out of range"),
+        (("playfield", "width"), 1.0e300, "width: 1e+300 is out of range"),
+        (("flippers", 0, "length"), 1.0e300, "length: 1e+300 is out of range"),
+        (("simulation", "resting_speed"), 1.0e300, "resting_speed: 1e+300 is out of range"),
+        (("walls", 8, "score"), 2**63, "score: 9223372036854775808 is out of range"),
+    ],
+)
+def test_absurd_numbers_are_rejected(path, value, message):
+    data = classic_dict()
+    if path == ("simulation", "skin") or path == ("simulation", "resting_speed"):
+        data["simulation"] = {}
+    target = data
+    for key in path[:-1]:
+        target = target[key]
+    target[path[-1]] = value
+    with pytest.raises(TableError, match=message.replace("+", r"\+")):
+        table_from_dict(data, "t.yaml")
+
+
+def test_a_kicker_must_lose_energy_at_a_bounce():
+    data = classic_dict()
+    data["materials"]["bumper"]["restitution"] = 1.0
+    with pytest.raises(TableError, match="kicker needs a material with restitution < 1"):
+        table_from_dict(data)
+
+
+ABSURD_STATE_SCRIPT = """
+import numpy as np
+from pinball_env.table import load_table
+from pinball_env.world import World
+world = World(load_table("classic"))
+world.step(np.array([[True, False]]))  # the left flipper swings
+for speed in (1e6, 1e12, 1e300, float("inf")):
+    world.state.balls[0] = (0.2, 0.14, speed, -speed, 0.0)
+    world.state.active[0] = True
+    try:
+        for _ in range(3):
+            world.step(np.array([[True, True]]))
+        print(speed, "stepped")
+    except FloatingPointError as error:
+        print(speed, "reported:", error)
+"""
+
+
+def test_a_step_from_an_absurd_state_returns():
+    # In a subprocess with a timeout: a regression that loops for ever cannot hang the suite.
+    result = subprocess.run(
+        [sys.executable, "-c", ABSURD_STATE_SCRIPT],
+        cwd=ROOT, capture_output=True, text=True, timeout=120, check=True,
+    )  # fmt: skip
+    lines = result.stdout.splitlines()
+    assert len(lines) == 4
+    assert lines[-1].startswith("inf reported: the ball state of env(s) [0] is no longer finite")
+
+
+def test_place_ball_rejects_non_finite_and_absurd_states():
+    world = World(load_table("classic"))
+    with pytest.raises(ValueError, match="finite"):
+        world.place_ball(0, (0.2, 0.5), (math.inf, 0.0))
+    with pytest.raises(ValueError, match="finite"):
+        world.place_ball(0, (math.nan, 0.5))
+    with pytest.raises(ValueError, match="above"):
+        world.place_ball(0, (0.2, 0.5), (1e5, 0.0))
+
+
+# --- 2. what is read is bounded ------------------------------------------------------------------
+
+
+def test_a_yaml_alias_bomb_gives_a_short_error(tmp_path):
+    levels = ["&a0 [x, x, x, x, x, x, x, x, x, x]"]
+    levels += [f"&a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]" for i in range(1, 9)]
+    text = (builtin_tables_dir() / "box.yaml").read_text()
+    path = tmp_path / "bomb.yaml"
+    path.write_text(text.replace("name: box", "name: [" + ", ".join(levels) + "]"))
+    with pytest.raises(TableError, match="name: expected a non-empty string") as error:
+        load_table(path)
+    assert len(str(error.value)) < 1000
+
+
+def test_a_huge_file_is_not_read(tmp_path):
+    path = tmp_path / "huge.yaml"
+    path.write_text("# padding\n" * 200_000)
+    with pytest.raises(TableError, match="a table file may have at most"):
+        load_table(path)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("name: " + "[" * 600 + "]" * 600 + "\n", "nested too deeply"),
+        (None, r"gravity: 9999999999.*is out of range \(too large\)"),
+    ],
+)
+def test_bad_files_give_table_errors_not_other_exceptions(tmp_path, text, message):
+    if text is None:  # an integer literal of 400 digits
+        text = (builtin_tables_dir() / "box.yaml").read_text()
+        text = text.replace("gravity: 9.81", "gravity: " + "9" * 400)
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(TableError, match=message):
+        load_table(path)
+
+
+# --- 3. tables that would let the ball out --------------------------------------------------------
+
+
+def test_a_one_sided_outline_is_rejected():
+    data = classic_dict()
+    data["walls"][0]["one_sided"] = True
+    data["walls"][0]["points"] = data["walls"][0]["points"][::-1]  # normals facing out
+    with pytest.raises(TableError, match=r"outline .* must be two-sided"):
+        table_from_dict(data)
+
+
+@pytest.mark.parametrize(
+    ("key", "element"),
+    [
+        ("walls", {"name": "x", "points": [[0.17, 0.14], [0.26, 0.14]], "material": "wall"}),
+        ("posts", {"name": "x", "center": [0.20, 0.135], "radius": 0.004, "material": "rubber"}),
+    ],
+)
+def test_nothing_may_lie_in_a_flippers_swing(key, element):
+    data = classic_dict()
+    data[key].append(element)
+    with pytest.raises(TableError, match="lies in the flipper's swing"):
+        table_from_dict(data)
+
+
+def test_a_ball_pinched_against_a_wall_stays_out_of_it_and_stops_spinning():
+    data = classic_dict()
+    data["walls"].append(
+        {"name": "lid", "points": [[0.10, 0.168], [0.30, 0.168]], "material": "wall"}
+    )
+    world = World(table_from_dict(data))
+    world.place_ball(0, (0.216, 0.1525), (0.0, -0.25))
+    pinched = 0
+    for _ in range(60):
+        world.step(np.array([[True, False]]))
+        assert_sound(world)
+        ball = world.balls[0]
+        if ball[BALL_VX] == ball[BALL_VY] == 0.0:
+            pinched += 1
+            assert ball[BALL_SPIN] == 0.0
+    assert pinched > 10
+
+
+@settings(max_examples=12)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_random_play_keeps_every_ball_sound(seed):
+    world = World(load_table("classic"), n_envs=8)
+    rng = np.random.default_rng(seed)
+    for env in range(8):
+        world.launch(env, rng.uniform(2.2, 3.2))
+    for _ in range(400):
+        world.step(rng.integers(0, 2, size=(8, 2)).astype(bool))
+        assert_sound(world)
+
+
+# --- 4. every game can end ------------------------------------------------------------------------
+
+
+def test_a_ball_at_rest_in_the_shooter_lane_is_served_again():
+    env = gym.make("Pinball-v0", balls=1)
+    env.reset(seed=0, options={"ball_velocity": [0.0, 0.5]})
+    frames = round((BALL_SEARCH_TIME + 3.0) * 60)  # it settles in about 2 s
+    heights = [env.step(0)[4]["ball_position"][1] for _ in range(frames)]
+    assert max(heights[:120]) < 0.2  # it rose 11 cm and fell back onto the plunger
+    assert max(heights) > 0.5  # then the ball search fired it up the lane
+    # And with random play the game ends.
+    rng = np.random.default_rng(0)
+    for _ in range(20_000):
+        if env.step(int(rng.integers(0, 4)))[2]:
+            break
+    else:
+        pytest.fail("the game did not end")
+
+
+def test_the_ball_search_clock_is_part_of_the_snapshot():
+    game = Game(load_table("classic"))
+    game.new_game(0, np.random.default_rng(0), {"ball_velocity": [0.0, 0.5]})
+    rngs = [np.random.default_rng(1)]
+    for _ in range(100):
+        game.step(np.array([0]), rngs)
+    snapshot = game.snapshot()
+    assert snapshot.still_frames[0] > 0
+    game.restore(snapshot)
+    assert game.state.still_frames[0] == snapshot.still_frames[0]
+
+
+# --- 5. fuzz: every table the loader accepts is sound -------------------------------------------
+
+NUMBERS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(2**70), 2**70),
+    st.sampled_from([0, 1, -1, 0.5, 1e-300, 1e300, 2**63, 0.0135, 0.3, 1.0]),
+)
+# Most mutations nudge a number (so that many fuzzed tables load and are played); the rest put
+# anything anywhere.
+NUDGE = st.tuples(st.just("nudge"), st.floats(0.8, 1.25), st.floats(-0.005, 0.005))
+WILD = st.one_of(NUMBERS, st.none(), st.text(max_size=5), st.lists(NUMBERS, max_size=3))
+VALUES = st.integers(0, 3).flatmap(lambda n: WILD if n == 0 else NUDGE)
+
+
+def mutate(data: dict, picks: list, values: list) -> None:
+    """Change leaves of ``data`` chosen by ``picks`` (indices into its leaf paths): set them to
+    ``values``, or for a ("nudge", factor, offset) scale a number and shift it."""
+    for pick, value in zip(picks, values, strict=True):
+        paths = list(leaf_paths(data))
+        path = paths[pick % len(paths)]
+        target = data
+        for key in path[:-1]:
+            target = target[key]
+        old = target[path[-1]]
+        if isinstance(value, tuple):
+            _, factor, offset = value
+            if isinstance(old, bool) or not isinstance(old, (int, float)):
+                continue
+            value = round(old * factor) if isinstance(old, int) else old * factor + offset
+        target[path[-1]] = value
+
+
+def leaf_paths(node, prefix=()):
+    if isinstance(node, dict):
+        for key, value in node.items():
+            yield from leaf_paths(value, (*prefix, key))
+    elif isinstance(node, list) and node:
+        for i, value in enumerate(node):
+            yield from leaf_paths(value, (*prefix, i))
+    else:
+        yield prefix
+
+
+@settings(max_examples=300)
+@given(
+    base=st.sampled_from(["classic", "box"]),
+    picks=st.lists(st.integers(0, 10_000), min_size=1, max_size=3),
+    data=st.data(),
+)
+def test_fuzzed_tables_are_rejected_clearly_or_play_soundly(base, picks, data):
+    raw = copy.deepcopy(classic_dict() if base == "classic" else box_dict())
+    mutate(raw, picks, [data.draw(VALUES) for _ in picks])
+    try:
+        table = table_from_dict(raw, "fuzz.yaml")
+    except TableError as error:
+        assert str(error).startswith("fuzz.yaml: ") and len(str(error)) < 1000
+        return
+    world = World(table, n_envs=2)
+    rng = np.random.default_rng(0)
+    if table.plunger is not None:
+        world.launch(1, table.plunger.speed[1])
+    for _ in range(120):
+        world.step(rng.integers(0, 2, size=(2, 2)).astype(bool))
+        assert_sound(world)
+
+
+# --- 6. a new user's first tries ----------------------------------------------------------------
+
+
+def test_image_size_may_be_one_int_and_is_checked():
+    env = gym.make("Pinball-v0", obs_type="grayscale", image_size=64)
+    assert env.reset(seed=0)[0].shape == (64, 64, 1)
+    with pytest.raises(ValueError, match="image_size must be an int or"):
+        gym.make("Pinball-v0", obs_type="rgb", image_size="big")
+
+
+def test_stepping_before_reset_needs_a_reset():
+    env = gym.make("Pinball-v0").unwrapped
+    with pytest.raises(ResetNeeded):
+        env.step(0)
+
+
+def test_frames_show_a_scoreboard_and_the_drained_ball():
+    env = gym.make("Pinball-v0", render_mode="rgb_array", balls=1)
+    env.reset(seed=0)
+    width, height = render_size(env.unwrapped.table)
+    first = env.render()
+    assert first.shape == (height, width + SCOREBOARD_WIDTH, 3)
+    while not env.step(0)[2]:
+        pass
+    last = env.render()
+    assert not np.array_equal(first[:, width:], last[:, width:])  # the balls left changed
+    empty = env.unwrapped._frame_renderer.frame(
+        None, env.unwrapped.game.world.state.flipper_angle[0]
+    )
+    assert not np.array_equal(last[:, :width], empty)  # the drained ball is drawn
+
+
+def test_every_scoreboard_character_is_distinct():
+    glyphs = [text_mask(char, 1).tobytes() for char in "0123456789ABCELORS"]
+    assert len(set(glyphs)) == len(glyphs) - 2  # O is 0 and S is 5, as on a real display
