@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
+from numba import njit
 
 from pinball_env.backends import make_world
 from pinball_env.physics import State
@@ -247,13 +248,11 @@ class Game:
         """Ball search (see BALL_SEARCH_TIME): serve again every ball in play that has not
         moved a ball radius for that long."""
         state = self.state
-        offset = self.world.balls[:, [BALL_X, BALL_Y]] - state.anchor
-        moved = np.einsum("ij,ij->i", offset, offset) > self.table.ball.radius**2
-        moved |= ~self.world.active  # a game that is over waits for its reset
-        state.still_frames[:] += 1
-        state.still_frames[moved] = 0
-        state.anchor[moved] = self.world.balls[moved][:, [BALL_X, BALL_Y]]
-        if state.still_frames.max() >= self.ball_search_frames:
+        due = _count_still_frames(
+            self.world.balls, self.world.active, state.anchor, state.still_frames,
+            self.table.ball.radius, self.ball_search_frames,
+        )  # fmt: skip
+        if due:
             for env in np.flatnonzero(state.still_frames >= self.ball_search_frames):
                 self.launch(env, rngs[env])
 
@@ -276,15 +275,10 @@ class Game:
         """(n_envs, 4 + 2F + 2) float32: ball x, y, vx, vy; each flipper's angle above rest and
         angular velocity towards up; ball in play; balls left. See PinballEnv's docstring."""
         world = self.world.state
-        balls = world.balls
-        lift = (world.flipper_angle - self._rest) * self._up_sign  # the kernel stops it exactly
-        velocity = np.clip(balls[:, [BALL_VX, BALL_VY]], -MAX_OBS_SPEED, MAX_OBS_SPEED)
-        obs = np.concatenate(
-            [balls[:, [BALL_X, BALL_Y]], velocity, lift, world.flipper_omega * self._up_sign,
-             world.active[:, None], self.state.balls_left[:, None]],
-            axis=1,
+        return _state_observation(
+            world.balls, world.flipper_angle, world.flipper_omega, world.active,
+            self.state.balls_left, self._rest, self._up_sign,
         )  # fmt: skip
-        return obs.astype(np.float32)
 
     def events(self, env: int) -> dict[str, int]:
         """The scoring elements env ``env`` hit in the last step: name -> hits."""
@@ -319,6 +313,45 @@ class Game:
             "points": int(state.points[env]),
             "drained": bool(state.drained[env]),
         }
+
+
+@njit(cache=True)
+def _count_still_frames(balls, active, anchor, still_frames, radius, limit):
+    """Count, per env, the frames since its ball last moved ``radius`` away from ``anchor``
+    (restarting the count and the anchor when it does, or is out of play). Returns whether a
+    count reached ``limit``. Compiled: the single env pays it every step."""
+    due = False
+    for env in range(balls.shape[0]):
+        dx = balls[env, BALL_X] - anchor[env, 0]
+        dy = balls[env, BALL_Y] - anchor[env, 1]
+        if not active[env] or dx * dx + dy * dy > radius * radius:
+            anchor[env, 0] = balls[env, BALL_X]
+            anchor[env, 1] = balls[env, BALL_Y]
+            still_frames[env] = 0
+        else:
+            still_frames[env] += 1
+            due = due or still_frames[env] >= limit
+    return due
+
+
+@njit(cache=True)
+def _state_observation(balls, flipper_angle, flipper_omega, active, balls_left, rest, up_sign):
+    """The state observation of every env (see :meth:`Game.observe`), float32. Compiled: the
+    single env pays it every step."""
+    n_envs, n_flippers = flipper_angle.shape
+    obs = np.empty((n_envs, 6 + 2 * n_flippers), dtype=np.float32)
+    for env in range(n_envs):
+        obs[env, 0] = balls[env, BALL_X]
+        obs[env, 1] = balls[env, BALL_Y]
+        obs[env, 2] = min(max(balls[env, BALL_VX], -MAX_OBS_SPEED), MAX_OBS_SPEED)
+        obs[env, 3] = min(max(balls[env, BALL_VY], -MAX_OBS_SPEED), MAX_OBS_SPEED)
+        for j in range(n_flippers):
+            # The angle above rest (the kernel stops it exactly) and the speed towards up.
+            obs[env, 4 + j] = (flipper_angle[env, j] - rest[j]) * up_sign[j]
+            obs[env, 4 + n_flippers + j] = flipper_omega[env, j] * up_sign[j]
+        obs[env, 4 + 2 * n_flippers] = active[env]
+        obs[env, 5 + 2 * n_flippers] = balls_left[env]
+    return obs
 
 
 def check_playable(table: Table) -> None:
