@@ -7,7 +7,13 @@
 - ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
 """
 
-from pinball_env.table.files import available_tables, builtin_tables_dir, dump_table, load_table
+from pinball_env.table.files import (
+    TABLES_DIR,
+    available_tables,
+    builtin_tables_dir,
+    dump_table,
+    load_table,
+)
 from pinball_env.table.model import (
     BUTTONS,
     Ball,
@@ -32,6 +38,7 @@ from pinball_env.table.schema import (
 __all__ = [
     "BUTTONS",
     "MAX_BALL_SPEED",
+    "TABLES_DIR",
     "Ball",
     "Flipper",
     "Material",

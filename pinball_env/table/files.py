@@ -27,6 +27,10 @@ def builtin_tables_dir() -> Path:
     return Path(str(resources.files("pinball_env.table") / "tables"))
 
 
+# The folder of the built-in tables, as a constant for scripts (``TABLES_DIR / "classic.yaml"``).
+TABLES_DIR = builtin_tables_dir()
+
+
 class _StrictLoader(yaml.SafeLoader):
     """Safe YAML loader that rejects a key repeated in one mapping (instead of keeping the last)."""
 
