@@ -18,5 +18,6 @@ MAX_EPISODE_STEPS = 7200
 register(
     id="Pinball-v0",
     entry_point="pinball_env.env:PinballEnv",
+    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
 )

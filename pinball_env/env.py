@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
+from gymnasium.spaces import Box, Space
 
 from pinball_env.game import DISCRETE_BUTTONS, Game, InvalidActions, check_choice
 from pinball_env.render import Renderer, Window, render_size, scoreboard
@@ -158,20 +159,10 @@ class PinballEnv(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.table.simulation.frame_rate}
 
-        if action_type == "discrete":
-            self.action_space = spaces.Discrete(len(DISCRETE_BUTTONS))
-        else:
-            self.action_space = spaces.MultiBinary(len(BUTTONS))
-        if obs_type == "state":
-            low, high = self.game.observation_bounds()
-            self.observation_space = spaces.Box(low, high, dtype=np.float32)
-            self._obs_renderer = None
-        else:
-            channels = 3 if obs_type == "rgb" else 1
-            shape = (*self.image_size, channels)
-            self.observation_space = spaces.Box(0, 255, shape, dtype=np.uint8)
-            height, width = self.image_size
-            self._obs_renderer = Renderer(self.table, width, height)
+        self.action_space, self.observation_space = make_spaces(
+            self.game, obs_type, self.image_size
+        )
+        self._obs_renderer = obs_renderer(self.table, obs_type, self.image_size)
         self._reset_done = False
         self._frame_renderer: Renderer | None = None
         self._window: Window | None = None
@@ -210,13 +201,7 @@ class PinballEnv(gym.Env):
             return None
         if self._frame_renderer is None:
             self._frame_renderer = Renderer(self.table, *render_size(self.table))
-        # The frame shows the ball where it drained after the last one, and a scoreboard.
-        world = self.game.world
-        playfield = self._frame_renderer.frame(
-            tuple(world.balls[0, :2]), world.state.flipper_angle[0]
-        )
-        board = scoreboard(playfield.shape[0], self.game.score[0], self.game.balls_left[0])
-        frame = np.concatenate([playfield, board], axis=1)
+        frame = render_frame(self._frame_renderer, self.game, 0)
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:
@@ -274,3 +259,33 @@ def _image_size(size: object) -> tuple[int, int]:
             f"image_size must be an int or (height, width) ints, each >= 16, got {size!r}"
         )
     return int(pair[0]), int(pair[1])
+
+
+def make_spaces(game: Game, obs_type: str, image_size: tuple[int, int]) -> tuple[Space, Box]:
+    """The action and observation spaces of one env of ``game`` (see PinballEnv)."""
+    if game.action_type == "discrete":
+        action_space: Space = spaces.Discrete(len(DISCRETE_BUTTONS))
+    else:
+        action_space = spaces.MultiBinary(len(BUTTONS))
+    if obs_type == "state":
+        low, high = game.observation_bounds()
+        return action_space, spaces.Box(low, high, dtype=np.float32)
+    channels = 3 if obs_type == "rgb" else 1
+    return action_space, spaces.Box(0, 255, (*image_size, channels), dtype=np.uint8)
+
+
+def obs_renderer(table: Table, obs_type: str, image_size: tuple[int, int]) -> Renderer | None:
+    """The renderer of image observations (None for state observations)."""
+    if obs_type == "state":
+        return None
+    height, width = image_size
+    return Renderer(table, width, height)
+
+
+def render_frame(renderer: Renderer, game: Game, env: int) -> np.ndarray:
+    """The frame ``render()`` shows for env ``env``: the playfield, with the ball where it
+    drained once the game is over, and a scoreboard beside it."""
+    world = game.world
+    playfield = renderer.frame(tuple(world.balls[env, :2]), world.state.flipper_angle[env])
+    board = scoreboard(playfield.shape[0], game.score[env], game.balls_left[env])
+    return np.concatenate([playfield, board], axis=1)

@@ -7,6 +7,7 @@ during play is in one record, :class:`GameState`, so that a game can be snapshot
 as one object.
 """
 
+import copy
 import math
 import numbers
 from collections.abc import Mapping, Sequence
@@ -70,6 +71,7 @@ class Game:
         height_shaping: weight of the height shaping term (0 = off): the rise of the ball
             during the step, in table heights.
         physics: the World backend, ``"swept"`` or ``"pymunk"``.
+        num_threads: threads that share the envs of a frame (the swept kernel).
 
     Attributes:
         world: the physics of every env.
@@ -85,6 +87,7 @@ class Game:
         reward_scale: float = 0.01,
         height_shaping: float = 0.0,
         physics: str = "swept",
+        num_threads: int = 1,
     ) -> None:
         check_playable(table)
         check_choice("action_type", action_type, ACTION_TYPES)
@@ -99,7 +102,7 @@ class Game:
         self.action_type = action_type
         self.reward_scale = float(reward_scale)
         self.height_shaping = float(height_shaping)
-        self.world = make_world(table, n_envs, physics)
+        self.world = make_world(table, n_envs, physics, num_threads)
         self.state = GameState(
             world=self.world.state,
             balls_left=np.zeros(n_envs, dtype=np.int64),
@@ -213,15 +216,28 @@ class Game:
         )
 
     def step(
-        self, actions: Any, rngs: Sequence[np.random.Generator]
+        self,
+        actions: Any,
+        rngs: Sequence[np.random.Generator],
+        frozen: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """One frame of every env with ``actions`` (see :meth:`buttons`). A drained ball is
         replaced by the next one off the plunger (drawn from the env's ``rngs`` entry); the game
-        ends when the last ball drains.
+        ends when the last ball drains. Envs where ``frozen`` (n_envs,) bool is set keep their
+        state as it is (a vector env's envs that have just been reset), with reward 0.
 
         Returns ``(reward, game_over)``, (n_envs,) float64 and bool. The step's points and
         drains are in :attr:`state`.
         """
+        if frozen is not None and frozen.any():
+            envs = np.flatnonzero(frozen)
+            saved = _take_rows(self.state, envs)
+            # A frozen env's draws go to a copy of its stream: it must not move on either.
+            rngs = [copy.deepcopy(rng) if frozen[i] else rng for i, rng in enumerate(rngs)]
+            reward, _ = self.step(actions, rngs)
+            _put_rows(saved, self.state, envs)
+            reward[envs] = 0.0
+            return reward, self.state.balls_left == 0
         buttons = self.buttons(actions)
         state, balls = self.state, self.world.balls
         height_before = balls[:, BALL_Y].copy() if self.height_shaping else None
@@ -374,6 +390,20 @@ def check_choice(name: str, value: object, choices: Sequence[object]) -> None:
 
 def _is_int(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _take_rows(record: tuple, rows: np.ndarray) -> Any:
+    """A copy of the given env rows of every array of a record (and nested records)."""
+    return type(record)(*(_take_rows(v, rows) if isinstance(v, tuple) else v[rows] for v in record))
+
+
+def _put_rows(source: tuple, target: tuple, rows: np.ndarray) -> None:
+    """Write rows taken by :func:`_take_rows` back into the same rows of ``target``."""
+    for src, dst in zip(source, target, strict=True):
+        if isinstance(dst, tuple):
+            _put_rows(src, dst, rows)
+        else:
+            dst[rows] = src
 
 
 def _copy(record: tuple) -> Any:

@@ -1,8 +1,9 @@
 """Pixel pictures of a table and its moving parts, for observations and for watching.
 
-:class:`Renderer` rasterises with numpy (no display, no pygame; flippers through the kernel's
-compiled ``flipper_distance``): the static layer (playfield, sensors, walls, posts) once, then
-per frame a copy of it with the flippers and the ball painted over their pixel bounding boxes.
+:class:`Renderer` rasterises with compiled painters (numba; no display, no pygame; lines and
+flippers through the kernel's own ``segment_offset`` and ``flipper_distance``): the static layer
+(playfield, sensors, walls, posts) once, then per frame a copy of it with the flippers and the
+ball painted over their pixel bounding boxes, for one env or a batch of envs in one call.
 :class:`Window` is a thin pygame window for ``render_mode="human"``.
 
 Image row 0 is the top of the table (y = height) and x grows to the right; the centre of pixel
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
+from pinball_env.parallel import EnvThreads
 from pinball_env.physics.flipper import flipper_distance
 from pinball_env.physics.sweep import segment_offset
 from pinball_env.table import Table
@@ -71,7 +73,9 @@ def render_size(table: Table, pixels_per_metre: float = 600.0) -> tuple[int, int
 class Renderer:
     """Draws a table into (height, width, 3) uint8 frames; the table fills the image (stretched if
     the aspect differs). The static layer (playfield, walls, posts, sensors) is rasterised once in
-    __init__; each frame copies it and draws the flippers and the ball."""
+    __init__; each frame copies it and draws the flippers and the ball, for one env
+    (:meth:`frame`, :meth:`grayscale`) or a batch of envs in one compiled call (:meth:`frames`).
+    """
 
     def __init__(self, table: Table, width: int, height: int) -> None:
         if width < 1 or height < 1:
@@ -79,28 +83,28 @@ class Renderer:
         self.table = table
         self.width = int(width)
         self.height = int(height)
-        self._sx = self.width / table.width  # [px/m]
-        self._sy = self.height / table.height
-        # World coordinates of the pixel centres, by column and by row.
-        self._xs = (np.arange(self.width) + 0.5) / self._sx
-        self._ys = table.height - (np.arange(self.height) + 0.5) / self._sy
+        # Pixels per metre, and the table height: the pixel centre (row i, column j) is the world
+        # point ((j + 0.5) / sx, table_height - (i + 0.5) / sy).
+        self._view = (self.width / table.width, self.height / table.height, table.height)
         # Anisotropic images: a world length maps to pixels at the geometric mean scale.
-        scale = math.sqrt(self._sx * self._sy)
-        self._flippers = [
-            (f.pivot[0], f.pivot[1], f.length, f.base_radius, f.tip_radius) for f in table.flippers
-        ]
+        scale = math.sqrt(self._view[0] * self._view[1])
+        self._flippers = np.array(
+            [(*f.pivot, f.length, f.base_radius, f.tip_radius) for f in table.flippers],
+            dtype=np.float64,
+        ).reshape(-1, 5)
 
         rgb = np.empty((self.height, self.width, 3), dtype=np.uint8)
         rgb[...] = BACKGROUND
         for sensor in table.sensors:
             colour = DRAIN if sensor.drain else SENSOR
-            self._line(rgb, sensor.segment, SENSOR_HALF_WIDTH * scale, colour)
+            _paint_line(rgb, *sensor.segment, SENSOR_HALF_WIDTH * scale, _rgb(colour), *self._view)
         for wall in table.walls:
             colour = ONE_SIDED if wall.one_sided else KICKER if wall.kick > 0 else WALL
             for segment in wall.segments():
-                self._line(rgb, segment, WALL_HALF_WIDTH * scale, colour)
+                _paint_line(rgb, *segment, WALL_HALF_WIDTH * scale, _rgb(colour), *self._view)
         for post in table.posts:
-            self._disc(rgb, *post.center, post.radius, KICKER if post.kick > 0 else POST)
+            colour = _rgb(KICKER if post.kick > 0 else POST)
+            _paint_disc(rgb, *post.center, post.radius, colour, *self._view)
         rgb.flags.writeable = False  # frames copy it; nothing may paint on it
         self._static_rgb = rgb
         # Every colour is painted solid, so the grayscale image is the same drawing in luma:
@@ -114,150 +118,173 @@ class Renderer:
         """The table with the flippers at ``flipper_angles`` [rad] (one per ``table.flippers``
         entry, in order) and the ball at ``ball_position`` [m] (None: out of play, not drawn),
         as a new (height, width, 3) uint8 array."""
-        return self._draw(self._static_rgb, ball_position, flipper_angles, FLIPPER, BALL)
+        return self._one(ball_position, flipper_angles, grayscale=False)
 
     def grayscale(
         self, ball_position: tuple[float, float] | None, flipper_angles: Sequence[float]
     ) -> np.ndarray:
         """:meth:`frame` as (height, width, 1) uint8 luma (:data:`LUMA_WEIGHTS`)."""
-        return self._draw(
-            self._static_gray, ball_position, flipper_angles, _FLIPPER_LUMA, _BALL_LUMA
-        )
+        return self._one(ball_position, flipper_angles, grayscale=True)
 
-    def _draw(
+    def frames(
         self,
-        static: np.ndarray,
+        balls: np.ndarray,
+        visible: np.ndarray,
+        flipper_angles: np.ndarray,
+        grayscale: bool = False,
+        out: np.ndarray | None = None,
+        threads: EnvThreads | None = None,
+    ) -> np.ndarray:
+        """Frames of a batch of envs: ball centres ``balls`` (N, >= 2) [m], drawn where
+        ``visible`` (N,) bool, flippers at ``flipper_angles`` (N, F) [rad]. Returns (N, height,
+        width, 3) uint8, or (N, height, width, 1) luma with ``grayscale``, written into ``out``
+        when given; ``threads`` share the envs."""
+        flipper_angles = np.asarray(flipper_angles, dtype=np.float64)
+        if flipper_angles.ndim != 2 or flipper_angles.shape[1] != len(self._flippers):
+            raise ValueError(
+                f"expected (N, {len(self._flippers)}) flipper angles, got {flipper_angles.shape}"
+            )
+        static = self._static_gray if grayscale else self._static_rgb
+        if out is None:
+            out = np.empty((flipper_angles.shape[0], *static.shape), dtype=np.uint8)
+        colours = (_FLIPPER_LUMA, _BALL_LUMA) if grayscale else (_rgb(FLIPPER), _rgb(BALL))
+        args = (
+            out, static, np.ascontiguousarray(balls, dtype=np.float64),
+            np.ascontiguousarray(visible, dtype=np.bool_), flipper_angles, self._flippers,
+            self.table.ball.radius, *colours, *self._view,
+        )  # fmt: skip
+        if threads is None:
+            _draw_moving_parts(*args, 0, len(out))
+        else:
+            threads.run(_draw_moving_parts, len(out), *args)
+        return out
+
+    def _one(
+        self,
         ball_position: tuple[float, float] | None,
         flipper_angles: Sequence[float],
-        flipper_colour: Colour,
-        ball_colour: Colour,
+        grayscale: bool,
     ) -> np.ndarray:
         if len(flipper_angles) != len(self._flippers):
             raise ValueError(
                 f"expected {len(self._flippers)} flipper angles, got {len(flipper_angles)}"
             )
-        image = static.copy()
-        for flipper, angle in zip(self._flippers, flipper_angles, strict=True):
-            self._capsule(image, *flipper, float(angle), flipper_colour)
-        if ball_position is not None:
-            x, y = ball_position
-            self._disc(image, float(x), float(y), self.table.ball.radius, ball_colour)
-        return image
+        visible = ball_position is not None
+        ball = np.array([ball_position if visible else (0.0, 0.0)], dtype=np.float64)
+        angles = np.array([flipper_angles], dtype=np.float64).reshape(1, -1)
+        return self.frames(ball, np.array([visible]), angles, grayscale)[0]
 
-    def _box(
-        self, x0: float, y0: float, x1: float, y1: float, margin: int
-    ) -> tuple[slice, slice] | None:
-        """Rows and columns of the pixels around the world box [x0, x1] x [y0, y1], widened by
-        ``margin`` pixels; None if that misses the image."""
-        if not math.isfinite(x0 + y0 + x1 + y1):
-            return None
-        c0 = max(0, math.floor(x0 * self._sx) - margin)
-        c1 = min(self.width, math.ceil(x1 * self._sx) + margin)
-        r0 = max(0, math.floor((self.table.height - y1) * self._sy) - margin)
-        r1 = min(self.height, math.ceil((self.table.height - y0) * self._sy) + margin)
-        if c0 >= c1 or r0 >= r1:
-            return None
-        return slice(r0, r1), slice(c0, c1)
 
-    def _line(
-        self,
-        image: np.ndarray,
-        segment: tuple[float, float, float, float],
-        half_width: float,
-        colour: Colour,
-    ) -> None:
-        """Paint pixels whose centre lies within ``half_width`` px of the segment, measured in
-        pixel coordinates so that a line keeps its width in a stretched image."""
-        half_width = max(MIN_LINE_HALF_WIDTH, half_width)
-        x0, y0, x1, y1 = segment
-        box = self._box(min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1), math.ceil(half_width))
-        if box is None:
-            return
-        rows, cols = box
-        # Segment ends and pixel centres in pixel coordinates (column, row).
-        ax, ay = x0 * self._sx, (self.table.height - y0) * self._sy
-        bx, by = x1 * self._sx, (self.table.height - y1) * self._sy
-        columns = np.arange(cols.start, cols.stop) + 0.5
-        pixel_rows = np.arange(rows.start, rows.stop) + 0.5
-        distance2 = _segment_field(columns, pixel_rows, ax, ay, bx, by)
-        image[rows, cols][distance2 <= half_width * half_width] = colour
-
-    def _disc(self, image: np.ndarray, cx: float, cy: float, radius: float, colour: Colour) -> None:
-        """Paint a world disc (an ellipse in a stretched image) plus its 0.5 px outline band."""
-        box = self._box(cx - radius, cy - radius, cx + radius, cy + radius, 1)
-        if box is None:
-            return
-        rows, cols = box
-        dx = self._xs[cols][None, :] - cx
-        dy = self._ys[rows][:, None] - cy
-        dx2, dy2 = dx * dx, dy * dy
-        distance = np.sqrt(dx2 + dy2)
-        # Outside, the pixel distance to the outline is to first order the world distance
-        # d = |q| - r over the size of its gradient in pixel coordinates, |(nx / sx, ny / sy)|
-        # with n = q / |q| (exact when sx = sy). Both sides multiplied by |q| to avoid dividing.
-        gradient = np.sqrt(dx2 / self._sx**2 + dy2 / self._sy**2)
-        mask = (distance - radius) * distance <= OUTLINE_BAND * gradient
-        image[rows, cols][mask] = colour
-
-    def _capsule(
-        self,
-        image: np.ndarray,
-        px: float,
-        py: float,
-        length: float,
-        rb: float,
-        rt: float,
-        angle: float,
-        colour: Colour,
-    ) -> None:
-        """Paint a flipper turned to ``angle`` about its pivot (px, py), plus its 0.5 px outline
-        band."""
-        c, s = math.cos(angle), math.sin(angle)
-        tx, ty = px + length * c, py + length * s
-        box = self._box(
-            min(px - rb, tx - rt),
-            min(py - rb, ty - rt),
-            max(px + rb, tx + rt),
-            max(py + rb, ty + rt),
-            1,
-        )
-        if box is None:
-            return
-        rows, cols = box
-        distance, nx, ny = _flipper_field(
-            self._xs[cols], self._ys[rows], px, py, length, rb, rt, angle
-        )
-        # The outline band in pixels: the distance's gradient (the unit normal) in pixel units.
-        gradient = np.hypot(nx / self._sx, ny / self._sy)
-        mask = distance <= OUTLINE_BAND * gradient
-        image[rows, cols][mask] = colour
+def _rgb(colour: Colour) -> np.ndarray:
+    return np.asarray(colour, dtype=np.uint8)
 
 
 @njit(cache=True)
-def _segment_field(xs, ys, x0, y0, x1, y1):
-    """Squared distance from every point (xs[j], ys[i]) to segment P0-P1 (the kernel's own
-    ``segment_offset``), an array of shape (len(ys), len(xs))."""
-    distance2 = np.empty((ys.shape[0], xs.shape[0]))
-    for i in range(ys.shape[0]):
-        for j in range(xs.shape[0]):
-            gx, gy = segment_offset(xs[j], ys[i], x0, y0, x1, y1)
-            distance2[i, j] = gx * gx + gy * gy
-    return distance2
+def _pixel_box(x0, y0, x1, y1, margin, sx, sy, table_height, width, height):
+    """Rows r0:r1 and columns c0:c1 of the pixels around the world box [x0, x1] x [y0, y1],
+    widened by ``margin`` pixels; an empty range if that misses the image."""
+    if not math.isfinite(x0 + y0 + x1 + y1):
+        return 0, 0, 0, 0
+    c0 = max(0, math.floor(x0 * sx) - margin)
+    c1 = min(width, math.ceil(x1 * sx) + margin)
+    r0 = max(0, math.floor((table_height - y1) * sy) - margin)
+    r1 = min(height, math.ceil((table_height - y0) * sy) + margin)
+    if c0 >= c1 or r0 >= r1:
+        return 0, 0, 0, 0
+    return r0, r1, c0, c1
 
 
 @njit(cache=True)
-def _flipper_field(xs, ys, px, py, length, rb, rt, angle):
-    """Signed distance and outward normal of a flipper at every pixel centre of a box (the
-    kernel's own ``flipper_distance``), arrays of shape (len(ys), len(xs))."""
-    distance = np.empty((ys.shape[0], xs.shape[0]))
-    nx = np.empty_like(distance)
-    ny = np.empty_like(distance)
-    for i in range(ys.shape[0]):
-        for j in range(xs.shape[0]):
-            distance[i, j], nx[i, j], ny[i, j] = flipper_distance(
-                xs[j], ys[i], px, py, length, rb, rt, angle
-            )
-    return distance, nx, ny
+def _paint_line(image, x0, y0, x1, y1, half_width, colour, sx, sy, table_height):
+    """Paint the pixels whose centre lies within ``half_width`` px of the segment, measured in
+    pixel coordinates so that a line keeps its width in a stretched image (the kernel's own
+    ``segment_offset``)."""
+    half_width = max(MIN_LINE_HALF_WIDTH, half_width)
+    height, width = image.shape[0], image.shape[1]
+    margin = math.ceil(half_width)
+    r0, r1, c0, c1 = _pixel_box(
+        min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1), margin, sx, sy, table_height,
+        width, height,
+    )  # fmt: skip
+    # Segment ends in pixel coordinates (column, row).
+    ax, ay = x0 * sx, (table_height - y0) * sy
+    bx, by = x1 * sx, (table_height - y1) * sy
+    for row in range(r0, r1):
+        for col in range(c0, c1):
+            gx, gy = segment_offset(col + 0.5, row + 0.5, ax, ay, bx, by)
+            if gx * gx + gy * gy <= half_width * half_width:
+                image[row, col, :] = colour
+
+
+@njit(cache=True)
+def _paint_disc(image, cx, cy, radius, colour, sx, sy, table_height):
+    """Paint a world disc (an ellipse in a stretched image) plus its 0.5 px outline band."""
+    height, width = image.shape[0], image.shape[1]
+    r0, r1, c0, c1 = _pixel_box(
+        cx - radius, cy - radius, cx + radius, cy + radius, 1, sx, sy, table_height, width,
+        height,
+    )  # fmt: skip
+    for row in range(r0, r1):
+        dy = table_height - (row + 0.5) / sy - cy
+        dy2 = dy * dy
+        for col in range(c0, c1):
+            dx = (col + 0.5) / sx - cx
+            dx2 = dx * dx
+            distance = math.sqrt(dx2 + dy2)
+            # Outside, the pixel distance to the outline is to first order the world distance
+            # d = |q| - r over the size of its gradient in pixel coordinates, |(nx/sx, ny/sy)|
+            # with n = q / |q| (exact when sx = sy). Both sides times |q| to avoid dividing.
+            gradient = math.sqrt(dx2 / (sx * sx) + dy2 / (sy * sy))
+            if (distance - radius) * distance <= OUTLINE_BAND * gradient:
+                image[row, col, :] = colour
+
+
+@njit(cache=True)
+def _paint_flipper(image, px, py, length, rb, rt, angle, colour, sx, sy, table_height):
+    """Paint a flipper turned to ``angle`` about its pivot (px, py), plus its 0.5 px outline
+    band (the kernel's own ``flipper_distance``)."""
+    height, width = image.shape[0], image.shape[1]
+    tx, ty = px + length * math.cos(angle), py + length * math.sin(angle)
+    r0, r1, c0, c1 = _pixel_box(
+        min(px - rb, tx - rt), min(py - rb, ty - rt), max(px + rb, tx + rt),
+        max(py + rb, ty + rt), 1, sx, sy, table_height, width, height,
+    )  # fmt: skip
+    for row in range(r0, r1):
+        y = table_height - (row + 0.5) / sy
+        for col in range(c0, c1):
+            d, nx, ny = flipper_distance((col + 0.5) / sx, y, px, py, length, rb, rt, angle)
+            # The outline band in pixels: the distance's gradient (the unit normal) in pixels.
+            if d <= OUTLINE_BAND * math.hypot(nx / sx, ny / sy):
+                image[row, col, :] = colour
+
+
+@njit(cache=True)
+def _draw_env(images, env, static, balls, visible, angles, flippers, radius, flipper_colour,
+              ball_colour, sx, sy, table_height):  # fmt: skip
+    """One env's frame: the static layer, its flippers, and its ball where visible."""
+    images[env] = static
+    for j in range(flippers.shape[0]):
+        f = flippers[j]
+        _paint_flipper(
+            images[env], f[0], f[1], f[2], f[3], f[4], angles[env, j], flipper_colour, sx, sy,
+            table_height,
+        )  # fmt: skip
+    if visible[env]:
+        _paint_disc(
+            images[env], balls[env, 0], balls[env, 1], radius, ball_colour, sx, sy, table_height
+        )
+
+
+@njit(cache=True, nogil=True)
+def _draw_moving_parts(images, static, balls, visible, angles, flippers, radius, flipper_colour,
+                       ball_colour, sx, sy, table_height, start, stop):  # fmt: skip
+    """The frames of envs ``start`` to ``stop`` (see :func:`_draw_env`). The GIL is released,
+    so threads can draw disjoint ranges at once."""
+    for env in range(start, stop):
+        _draw_env(
+            images, env, static, balls, visible, angles, flippers, radius, flipper_colour,
+            ball_colour, sx, sy, table_height,
+        )  # fmt: skip
 
 
 # The scoreboard beside rendered frames: a 3x5 pixel font (rows top to bottom, bits left to right)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pinball_env.parallel import EnvThreads
 from pinball_env.physics import CONTACT_CAPACITY, make_scratch, make_state, step_world
 from pinball_env.physics.columns import (
     BALL_VX,
@@ -49,9 +50,12 @@ class World:
         state: the kernel's per-env arrays (``physics.State``): balls, active, flipper angles
             and angular velocities, flipper commands, the contact log and the hit counts.
         scratch: the kernel's per-env work arrays.
+        num_threads: threads that share the envs of a frame (the kernel releases the GIL; the
+            results are bitwise the same for any count).
     """
 
-    def __init__(self, table: Table, n_envs: int = 1) -> None:
+    def __init__(self, table: Table, n_envs: int = 1, num_threads: int = 1) -> None:
+        self.threads = EnvThreads(num_threads)
         self.table = table
         self.geometry = table.pack()
         self.settings = table.pack_settings()
@@ -138,7 +142,10 @@ class World:
     def _advance(self) -> int:
         """One frame of physics on the state arrays: the swept-collision kernel. Returns the
         number of envs whose ball state is no longer finite."""
-        return step_world(self.geometry, self.settings, self.state, self.scratch)
+        args = (self.geometry, self.settings, self.state, self.scratch)
+        if self.threads.num_threads == 1:
+            return step_world(*args)
+        return sum(self.threads.run(step_world, self.n_envs, *args))
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""

@@ -6,10 +6,13 @@ from pinball_env.world import World
 PHYSICS = ("swept", "pymunk")
 
 
-def make_world(table: Table, n_envs: int = 1, physics: str = "swept") -> World:
-    """A World of ``n_envs`` games on ``table``, simulated by the ``physics`` backend."""
+def make_world(
+    table: Table, n_envs: int = 1, physics: str = "swept", num_threads: int = 1
+) -> World:
+    """A World of ``n_envs`` games on ``table``, simulated by the ``physics`` backend (the
+    swept kernel on ``num_threads`` threads; pymunk on one)."""
     if physics == "swept":
-        return World(table, n_envs)
+        return World(table, n_envs, num_threads)
     if physics == "pymunk":
         from pinball_env.backends.pymunk_backend import PymunkWorld  # pymunk is an extra
 

@@ -475,18 +475,20 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     return math.isfinite(x + y + vx + vy + spin)
 
 
-@njit(cache=True)
-def step_world(geometry, settings, state, scratch):
-    """Advance every env by one frame ``settings.dt`` in place, logging contacts and hits.
-    Returns the number of envs whose ball state is not finite after the frame (0 for any
-    valid table and state; the caller reports the others).
+@njit(cache=True, nogil=True)
+def step_world(geometry, settings, state, scratch, start=0, stop=-1):
+    """Advance envs ``start`` to ``stop`` (default: every env) by one frame ``settings.dt`` in
+    place, logging contacts and hits. Returns the number of those envs whose ball state is not
+    finite after the frame (0 for any valid table and state; the caller reports the others).
 
     Envs are independent: each reads and writes only its own rows of ``state`` and
-    ``scratch`` (so this loop can run in parallel).
+    ``scratch``. The GIL is released, so threads can step disjoint ranges of envs at once,
+    with bitwise the results of one call.
     """
     flipper_id = first_flipper(geometry)
+    stop = state.balls.shape[0] if stop < 0 else stop
     faults = 0
-    for env in range(state.balls.shape[0]):
+    for env in range(start, stop):
         if not step_ball(geometry, settings, state, scratch, env, flipper_id):
             faults += 1
     return faults
