@@ -39,7 +39,8 @@ def test_the_table_imports_only_physics_and_itself(path):
 
 def test_importing_the_package_loads_no_agent_library_and_no_tool():
     code = (
-        "import sys, gymnasium as gym, pinball_env; gym.make('Pinball-v0').reset(seed=0); "
+        "import sys, gymnasium as gym, pinball_env, pinball_env.wrappers; "
+        "gym.make('Pinball-v0').reset(seed=0); gym.make_vec('Pinball-v0', num_envs=2); "
         "heavy = {'torch', 'stable_baselines3', 'pymunk', 'pygame', 'matplotlib', 'ray'}; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy "
         "or m.startswith('pinball_env.tools')))"

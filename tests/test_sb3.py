@@ -1,0 +1,54 @@
+"""The stable-baselines3 adapter over the native vector env: SB3's checks, autoreset, training."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+
+import pinball_env  # noqa: F401  (registers Pinball-v0)
+from pinball_env.wrappers import SB3VecEnv
+
+torch.set_num_threads(1)  # torch's default thread count slows SB3 on small machines
+
+
+def test_steps_report_terminal_observations_and_time_limits():
+    env = SB3VecEnv(gym.make_vec("Pinball-v0", num_envs=4, max_episode_steps=40))
+    env.seed(7)
+    obs = env.reset()
+    assert obs.shape == (4, 10)
+    for _ in range(40):
+        obs, rewards, dones, infos = env.step(np.zeros(4, dtype=np.int64))
+    assert dones.all() and rewards.dtype == np.float32
+    for info in infos:
+        assert info["TimeLimit.truncated"] and info["episode"]["l"] == 40
+        assert info["terminal_observation"].shape == (10,)
+    # The observation returned is already the next episode's first: on the plunger, 3 balls.
+    plunger = env.venv.table.plunger.position
+    np.testing.assert_allclose(obs[:, :2], [plunger] * 4, rtol=1e-6)
+    assert (obs[:, 9] == 3).all()
+
+
+def test_seeding_attributes_and_images():
+    env = SB3VecEnv(gym.make_vec("Pinball-v0", num_envs=2, render_mode="rgb_array"))
+    env.seed(3)
+    a = env.reset()
+    env.seed(3)
+    assert env.reset().tobytes() == a.tobytes()
+    assert env.get_attr("num_envs") == [2, 2]
+    assert env.env_is_wrapped(gym.Wrapper) == [False, False]
+    assert len(env.get_images()) == 2 and env.get_images()[0].ndim == 3
+    with pytest.raises(TypeError, match="PinballVectorEnv"):
+        SB3VecEnv(gym.vector.SyncVectorEnv([lambda: gym.make("Pinball-v0")]))
+
+
+@pytest.mark.parametrize("algorithm", ["PPO", "DQN"])
+def test_sb3_trains_on_the_native_vector_env(algorithm):
+    import stable_baselines3
+
+    env = SB3VecEnv(gym.make_vec("Pinball-v0", num_envs=16 if algorithm == "PPO" else 4))
+    kwargs = {"n_steps": 16, "batch_size": 64} if algorithm == "PPO" else {"learning_starts": 64}
+    model = getattr(stable_baselines3, algorithm)("MlpPolicy", env, seed=0, device="cpu", **kwargs)
+    model.learn(total_timesteps=512)
+    assert model.num_timesteps >= 512
+    action, _ = model.predict(env.reset(), deterministic=True)
+    assert env.action_space.contains(action[0])
