@@ -144,7 +144,7 @@ class World:
         number of envs whose ball state is no longer finite."""
         args = (self.geometry, self.settings, self.state, self.scratch)
         if self.threads.num_threads == 1:
-            return step_world(*args)
+            return step_world(*args, 0, self.n_envs)
         return sum(self.threads.run(step_world, self.n_envs, *args))
 
     def frame_points(self) -> np.ndarray:
