@@ -10,6 +10,7 @@ as one object.
 import copy
 import math
 import numbers
+import reprlib
 from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
@@ -157,10 +158,10 @@ class Game:
         reset leaves the env as it was.
         """
         options = dict(options or {})
-        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        unknown = sorted(reprlib.repr(key) for key in options if key not in RESET_OPTIONS)
         if unknown:
             raise ValueError(
-                f"unknown reset option(s) {', '.join(map(repr, unknown))} "
+                f"unknown reset option(s) {', '.join(unknown[:5])} "
                 f"(allowed: {', '.join(RESET_OPTIONS)})"
             )
         if options:
@@ -380,6 +381,11 @@ def check_playable(table: Table) -> None:
         raise ValueError(f"table {table.name!r} has no closed outline wall to keep the ball in")
     if not any(sensor.drain for sensor in table.sensors):
         raise ValueError(f"table {table.name!r} has no drain sensor: a game could never end")
+    if not table.drain_reachable:
+        raise ValueError(
+            f"table {table.name!r}: no drain can be reached from the plunger, a game could "
+            "never end"
+        )
 
 
 def check_choice(name: str, value: object, choices: Sequence[object]) -> None:

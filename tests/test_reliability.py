@@ -181,6 +181,22 @@ def test_bad_files_give_table_errors_not_other_exceptions(tmp_path, text, messag
         load_table(path)
 
 
+def test_odd_names_and_options_give_clear_errors():
+    with pytest.raises(TableError, match="cannot read the file") as error:
+        load_table("a" * 5000 + ".yaml")
+    assert len(str(error.value)) < 400
+    with pytest.raises(TypeError, match="a table is a name or a path, got NoneType"):
+        load_table(None)
+    env = gym.make("Pinball-v0")
+    env.reset(seed=0)
+    for options in ({1: 1, "a": 2}, {"x" * 10**6: 1}):
+        with pytest.raises(ValueError, match="unknown reset option") as error:
+            env.reset(options=options)
+        assert len(str(error.value)) < 200
+    with pytest.raises(ValueError, match=r"speed 100.0000001 m/s is above 100 m/s"):
+        env.reset(options={"ball_velocity": [0.0, 100.0000001]})
+
+
 # --- 3. tables that would let the ball out --------------------------------------------------------
 
 
@@ -224,6 +240,46 @@ def test_a_ball_pinched_against_a_wall_stays_out_of_it_and_stops_spinning():
     assert pinched > 10
 
 
+def test_a_ball_squeezed_against_a_slanted_wall_stays_out_of_it_and_of_the_flipper():
+    # Found in review: flipper, wall, flipper, ... the last push, the flipper's, went into the
+    # wall (56 skins deep). The flipper's push is now swept against the walls.
+    data = classic_dict()
+    data["walls"].append(
+        {"name": "lid", "points": [[0.12, 0.184], [0.32, 0.172]], "material": "wall"}
+    )
+    world = World(table_from_dict(data))
+    world.place_ball(0, (0.215, 0.145))
+    for _ in range(240):
+        world.step(np.array([[True, False]]))
+        assert_sound(world)
+
+
+def test_a_cut_sweep_is_no_pinch():
+    # Found in review: a flipper sweep that ran out of slices was taken for a pinch, and the
+    # flipper was put back onto the ball (11.8 mm deep).
+    data = classic_dict()
+    data["simulation"] = {"frame_rate": 1.0, "substeps": 1, "max_passes": 4, "skin": 1.0e-7}
+    data["posts"].append(
+        {"name": "x0", "center": [0.2722, 0.1797], "radius": 0.0187, "material": "rubber"}
+    )
+    world = World(table_from_dict(data))
+    world.step(np.array([[True, True]]))
+    world.place_ball(0, (0.2317, 0.1500), (-2.90, 4.11))
+    for _ in range(5):
+        world.step(np.array([[False, False]]))
+        assert_sound(world)
+
+
+def test_a_small_ball_between_a_resting_flipper_and_a_guide_stays_out_of_both():
+    data = classic_dict()
+    data["ball"]["radius"] = 0.0079
+    world = World(table_from_dict(data))
+    world.place_ball(0, (0.1392, 0.1383))
+    for _ in range(600):
+        world.step(np.array([[False, False]]))
+        assert_sound(world)
+
+
 @settings(max_examples=12)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_random_play_keeps_every_ball_sound(seed):
@@ -253,6 +309,15 @@ def test_a_ball_at_rest_in_the_shooter_lane_is_served_again():
             break
     else:
         pytest.fail("the game did not end")
+
+
+def test_a_table_whose_drain_no_ball_can_reach_cannot_be_played():
+    data = classic_dict()
+    data["sensors"][-1]["points"] = [[0.088, 0.26], [0.11, 0.26]]  # inside the left slingshot
+    table = table_from_dict(data)
+    assert not table.drain_reachable and load_table("classic").drain_reachable
+    with pytest.raises(ValueError, match="no drain can be reached from the plunger"):
+        gym.make("Pinball-v0", table=table)
 
 
 def test_the_ball_search_clock_is_part_of_the_snapshot():

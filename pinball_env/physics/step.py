@@ -331,6 +331,26 @@ def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossi
 
 
 @njit(cache=True)
+def unwedge(x, y, a, ax, ay, b, bx, by, geometry, angles, r, skin):
+    """The ball centre moved the least so that it lies at least ``skin`` off both elements
+    ``a`` and ``b`` (normals (ax, ay), (bx, by) at the contacts), the flippers at ``angles``.
+    Separating from one at a time, as the passes do, leaves a ball wedged in a narrow V pushed
+    into whichever it left last."""
+    pa = r + skin - surface_distance(x, y, a, geometry, angles)
+    pb = r + skin - surface_distance(x, y, b, geometry, angles)
+    if pa <= 0.0 and pb <= 0.0:
+        return x, y
+    if pa > 0.0 and pa * (ax * bx + ay * by) >= pb:  # a push off a alone clears b too
+        return x + ax * pa, y + ay * pa
+    if pb > 0.0 and pb * (ax * bx + ay * by) >= pa:  # a push off b alone clears a too
+        return x + bx * pb, y + by * pb
+    det = ax * by - ay * bx
+    if abs(det) < 1e-6:  # (nearly) facing surfaces closer than a ball: no room to be found
+        return x, y
+    return x + (pa * by - ay * pb) / det, y + (ax * pb - bx * pa) / det
+
+
+@njit(cache=True)
 def release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held):
     """A wedged ball (time left in its substep after the pass cap or the progress rule) has
     the rest of the substep dropped; so has every flipper that is still moving ``held_time``
@@ -388,6 +408,9 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             remaining = h
             stalled = n_hits = 0
             pusher = -1  # the last flipper that pushed into the ball
+            cut = False
+            # The last two different elements touched, and their normals (for a wedge).
+            last, last_nx, last_ny, before, before_nx, before_ny = -1, 0.0, 0.0, -1, 0.0, 0.0
             for _ in range(settings.max_passes):
                 if remaining <= 0.0:
                     break
@@ -441,8 +464,20 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 for j in range(n_flippers):
                     angles[j] = flipper_angle_at(angle[env, j], omegas[j], stops[j], h - remaining)
                 push = r + settings.skin - surface_distance(x, y, element, geometry, angles)
+                if element >= flipper_id and push > 0.0 and svx * nx + svy * ny > 0.0:
+                    # A swinging flipper's push is swept against the walls and posts, so that a
+                    # ball squeezed between them stays out of the wall (and the flipper,
+                    # blocked, stalls): the ball stops a skin short of the first it would touch.
+                    t_push, _, _, _ = earliest_static_contact(
+                        x, y, nx * push, ny * push, r + settings.skin, segments, bounds,
+                        one_sided, circles,
+                    )  # fmt: skip
+                    push *= min(t_push, 1.0)
                 x += nx * push
                 y += ny * push
+                if element != last:
+                    before, before_nx, before_ny = last, last_nx, last_ny
+                last, last_nx, last_ny = element, nx, ny
                 log_contact(state, env, element, k * h + h - remaining, speed)
                 if is_hit(speed, props[PROP_KICK], settings.resting_speed):
                     hit_elements[n_hits] = element
@@ -454,14 +489,20 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     break
             pinched = False
             if remaining > 0.0 and state.active[env]:
+                if not cut and before >= 0:  # a wedge: clear of both surfaces at once
+                    x, y = unwedge(
+                        x, y, last, last_nx, last_ny, before, before_nx, before_ny, geometry,
+                        angles, r, settings.skin,
+                    )  # fmt: skip
                 held_time = h - remaining
                 pinched = release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held)
-                if pinched:
+                if pinched and not cut:
                     # The pinched ball is at rest, and its pinch is no hit. The flipper that
                     # pinches it stays where it started the substep: moving on to where it met
-                    # the ball would squeeze the ball a little further into the wall each time.
+                    # the ball, it would squeeze into the ball a little further each time.
                     vx = vy = spin = 0.0
                     stops[pusher] = 0.0
+                pinched = pinched and not cut
             if not pinched:
                 for n in range(n_hits):
                     state.hits[env, hit_elements[n]] += 1

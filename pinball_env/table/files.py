@@ -57,16 +57,23 @@ def available_tables() -> list[str]:
 
 def load_table(name_or_path: str | os.PathLike[str]) -> Table:
     """Load a table from a .yaml/.yml path, or a built-in one by bare name (``"classic"``)."""
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        raise TypeError(f"a table is a name or a path, got {type(name_or_path).__name__}")
     path = Path(name_or_path)
-    if path.suffix not in SUFFIXES and len(path.parts) == 1:
-        candidates = [builtin_tables_dir() / f"{path.name}{suffix}" for suffix in SUFFIXES]
-        path = next((p for p in candidates if p.is_file()), None)
-        if path is None:
-            available = ", ".join(available_tables()) or "none"
-            raise TableError(f"unknown table {str(name_or_path)!r} (available: {available})")
+    shown = _shorten(str(name_or_path), 120)
+    try:
+        if path.suffix not in SUFFIXES and len(path.parts) == 1:
+            candidates = [builtin_tables_dir() / f"{path.name}{suffix}" for suffix in SUFFIXES]
+            path = next((p for p in candidates if p.is_file()), None)
+            if path is None:
+                available = ", ".join(available_tables()) or "none"
+                raise TableError(f"unknown table {shown!r} (available: {available})")
+        found = path.is_file()
+    except OSError as exc:  # a name too long for the file system, say
+        raise TableError(f"{shown}: cannot read the file: {_shorten(str(exc), 120)}") from None
     source = str(path)
-    if not path.is_file():
-        raise TableError(f"{source}: table file not found")
+    if not found:
+        raise TableError(f"{_shorten(source, 120)}: table file not found")
     try:
         size = path.stat().st_size
         if size > MAX_TABLE_BYTES:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from pinball_env.physics import Geometry, Settings, columns, flipper_distance, segment_bounds
-from pinball_env.table.reachable import free_space
+from pinball_env.table.reachable import CELL, free_space, touches
 
 # The flipper buttons, in the order of the columns of a buttons array (and of the bits of a
 # discrete action, see ``pinball_env.game``).
@@ -195,6 +195,14 @@ class Table:
             self.width, self.height, self.ball.radius, two_sided, geometry.circles,
             geometry.flippers, start, drains,
         )  # fmt: skip
+
+    @cached_property
+    def drain_reachable(self) -> bool:
+        """Whether a ball in play can get to a drain (so that a game can end): some place it
+        can reach (:attr:`free_space`) lies right beside a drain line."""
+        geometry = self.pack()
+        drains = geometry.sensors[geometry.sensor_drain]
+        return bool(touches(self.free_space, drains, 2.5 * CELL, CELL))
 
     @property
     def outline(self) -> Wall | None:

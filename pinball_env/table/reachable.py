@@ -144,6 +144,25 @@ def free_space(
     return _flood(blocked, *cell_of(start, blocked.shape))
 
 
+@njit(cache=True)
+def touches(reached, segments, reach, cell):
+    """Whether a reached cell lies within ``reach`` of one of the segments."""
+    n_rows, n_cols = reached.shape
+    for k in range(segments.shape[0]):
+        x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
+        c0 = max(int((min(x0, x1) - reach) / cell), 0)
+        c1 = min(int((max(x0, x1) + reach) / cell) + 1, n_cols)
+        r0 = max(int((min(y0, y1) - reach) / cell), 0)
+        r1 = min(int((max(y0, y1) + reach) / cell) + 1, n_rows)
+        for row in range(r0, r1):
+            for col in range(c0, c1):
+                if reached[row, col]:
+                    dx, dy = segment_offset((col + 0.5) * cell, (row + 0.5) * cell, x0, y0, x1, y1)
+                    if dx * dx + dy * dy <= reach * reach:
+                        return True
+    return False
+
+
 def cell_of(point: tuple[float, float], shape: tuple[int, int]) -> tuple[int, int]:
     """(row, col) of the grid cell holding ``point``, clipped to the grid."""
     row = min(max(int(point[1] / CELL), 0), shape[0] - 1)

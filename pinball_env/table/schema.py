@@ -52,9 +52,11 @@ MAX_POSTS = 256
 MAX_FLIPPERS = 8
 MAX_SENSORS = 256
 MAX_SCORE = 1_000_000  # points per hit
-# A wall or post must keep this far from the area a flipper sweeps [m] (the check samples the
-# swing at this resolution).
+# A wall or post must keep this far from the area a flipper sweeps [m]. The check samples the
+# swing and each segment at most SWING_SAMPLES times, so on a large flipper it keeps a wall a
+# few sample steps away (about 1/100 of the swing's arc) rather than do unbounded work.
 SWING_CLEARANCE = 3e-4
+SWING_SAMPLES = 200
 
 _short = reprlib.Repr()
 _short.maxstring = _short.maxother = 60
@@ -212,7 +214,7 @@ def _velocity(value: object, loc: _Loc) -> tuple[float, float]:
     vx, vy = _pair(value, loc)
     if math.hypot(vx, vy) > MAX_BALL_SPEED:
         loc.fail(
-            f"speed {math.hypot(vx, vy):g} m/s is above {MAX_BALL_SPEED:g} m/s "
+            f"speed {math.hypot(vx, vy):.10g} m/s is above {MAX_BALL_SPEED:g} m/s "
             "(no pinball moves that fast)"
         )
     return (vx, vy)
@@ -268,6 +270,7 @@ _gravity = partial(_number, low=0.0, high=100.0, open_low=True)  # [m/s^2]: Eart
 
 def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     """Validate a table description (as read from YAML) into a :class:`Table`."""
+    source = source if len(source) <= 200 else _short.repr(source)
     top = _Loc(source)
     raw = _mapping(data, top, ["name", "playfield", "ball", "materials"], _TOP_KEYS)
     playfield = _mapping(raw["playfield"], top.key("playfield"), ["width", "height"])
@@ -593,48 +596,54 @@ def _check_swings(groups: Mapping[str, tuple[Any, ...]], top: _Loc) -> None:
         gap, element = _swing_clearance(
             *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
             math.radians(flipper.rest_angle), math.radians(flipper.up_angle), segments,
-            circles, SWING_CLEARANCE / 2.0,
+            circles, SWING_CLEARANCE / 2.0, SWING_SAMPLES,
         )  # fmt: skip
         if gap < SWING_CLEARANCE:
             top.key("flippers").index(i, flipper.name).fail(
-                f"{owners[element]} lies in the flipper's swing (or within "
-                f"{1e3 * SWING_CLEARANCE:g} mm of it): a rising flipper would hit a ball "
-                "through it"
+                f"{owners[element]} lies in the flipper's swing (or too close to be sure it "
+                "does not): a rising flipper would hit a ball through it"
             )
 
 
 @njit(cache=True)
-def _swing_clearance(px, py, length, rb, rt, a0, a1, segments, circles, step):
-    """Smallest distance between a flipper swinging from angle a0 to a1 and the segments and
-    circles, sampled so that the true distance is at most ``2 step`` less (points along the
-    segments every ``step``, angles every ``step`` of arc at the flipper's reach). Returns
-    ``(distance, element)``, segments first then circles (``inf, -1`` when out of reach)."""
+def _swing_clearance(px, py, length, rb, rt, a0, a1, segments, circles, step, most):
+    """A lower bound of the distance between a flipper swinging from angle a0 to a1 and each
+    segment and circle, the smallest of them: ``(distance, element)``, segments first then
+    circles (``inf, -1`` when none is in reach). The swing is sampled at angles ``step`` of arc
+    apart at the flipper's reach and the segments at points ``step`` apart, at most ``most``
+    of each (so the work is bounded), and each sampled distance is lowered by twice the
+    sampling step used: no point of the swing or the segment is farther from a sample."""
     reach = flipper_reach(length, rb, rt)
-    n_angles = int(abs(a1 - a0) * reach / step) + 2
+    arc = abs(a1 - a0) * reach
+    n_angles = min(int(arc / step) + 2, most)
+    angle_step = arc / (n_angles - 1)
     best = math.inf
     best_element = -1
     for k in range(segments.shape[0]):
         x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
         if point_segment_distance(px, py, x0, y0, x1, y1) > reach + step:
             continue
-        n_points = int(math.hypot(x1 - x0, y1 - y0) / step) + 2
+        span = math.hypot(x1 - x0, y1 - y0)
+        n_points = min(int(span / step) + 2, most)
+        margin = 2.0 * max(angle_step, span / (n_points - 1))
         for i in range(n_points):
             s = i / (n_points - 1)
             x = x0 + s * (x1 - x0)
             y = y0 + s * (y1 - y0)
-            if math.hypot(x - px, y - py) > reach + step:
+            if math.hypot(x - px, y - py) > reach + margin:
                 continue
             for n in range(n_angles):
                 angle = a0 + (a1 - a0) * n / (n_angles - 1)
                 d, _, _ = flipper_distance(x, y, px, py, length, rb, rt, angle)
-                if d < best:
-                    best, best_element = d, k
+                if d - margin < best:
+                    best, best_element = d - margin, k
     for k in range(circles.shape[0]):
         for n in range(n_angles):
             angle = a0 + (a1 - a0) * n / (n_angles - 1)
             d, _, _ = flipper_distance(circles[k, 0], circles[k, 1], px, py, length, rb, rt, angle)
-            if d - circles[k, 2] < best:
-                best, best_element = d - circles[k, 2], segments.shape[0] + k
+            d -= circles[k, 2] + 2.0 * angle_step
+            if d < best:
+                best, best_element = d, segments.shape[0] + k
     return best, best_element
 
 
@@ -713,7 +722,8 @@ def check_ball_state(
     if not table.free_space[cell_of(point, table.free_space.shape)]:
         where.key("ball_position").fail(
             f"({point[0]:g}, {point[1]:g}) cannot be reached in play from the plunger: it is "
-            "walled off (inside a slingshot, say) or below a drain"
+            "walled off (inside a slingshot, say) or on the far side of a drain (or within a "
+            "millimetre of it)"
         )
     return point, _velocity(velocity, where.key("ball_velocity"))
 
