@@ -4,11 +4,12 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY, BALL_X, BALL_Y
-from pinball_env.table import load_table, table_from_dict
+from pinball_env.table import builtin_tables_dir, load_table, table_from_dict
 from pinball_env.world import CONTACT_CAPACITY, World
 
 RADIUS = 0.0135
@@ -360,3 +361,36 @@ def test_ball_partly_through_a_gate_next_to_a_wall_goes_back_instead_of_into_the
         world.step()
         assert world.balls[0, BALL_X] >= 0.01 + RADIUS - SKIN
     assert world.balls[0, BALL_VX] > 0.0 and world.balls[0, BALL_X] > 0.03 + RADIUS
+
+
+def crowded_classic():
+    """The classic table with 63 pins in its upper field: over the broad-phase threshold."""
+    data = yaml.safe_load((builtin_tables_dir() / "classic.yaml").read_text())
+    for i in range(9):
+        for j in range(7):
+            center = [0.07 + 0.05 * i, 0.40 + 0.07 * j + 0.02 * (i % 2)]
+            data["posts"].append(
+                {"name": f"pin{i}_{j}", "center": center, "radius": 0.004, "material": "rubber"}
+            )
+    return table_from_dict(data)
+
+
+@pytest.mark.slow  # minutes without the JIT
+def test_the_broad_phase_finds_bitwise_the_contacts_of_testing_everything():
+    table = crowded_classic()
+    assert table.pack_settings().grid_columns > 1  # the grid is in use
+    runs = []
+    for brute in (False, True):
+        world = World(table, n_envs=64)
+        if brute:
+            world.settings = world.settings._replace(grid_columns=1, grid_rows=1)
+        rng = np.random.default_rng(0)
+        for env in range(64):
+            world.launch(env, 2.2 + env * 0.015)
+        trace = []
+        for _ in range(400):
+            world.step(rng.integers(0, 2, size=(64, 2)).astype(bool))
+            trace.append((world.balls.tobytes(), world.state.contacts.tobytes()))
+        runs.append(trace)
+    assert runs[0] == runs[1]
+    assert load_table("classic").pack_settings().grid_columns == 1  # below the threshold

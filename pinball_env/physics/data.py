@@ -13,6 +13,7 @@ geometry tuple counts a reference to each of its arrays, which per contact costs
 arithmetic.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -23,6 +24,9 @@ from pinball_env.physics.columns import BALL_STATE_SIZE, CONTACT_SIZE
 # Contacts logged per env and frame; more are counted but not logged. A frame of a ball rattling
 # in a corner makes a few dozen; the cap bounds memory, not physics.
 CONTACT_CAPACITY = 64
+# Tables with fewer segments and circles than this skip the broad phase: on the 48 elements of
+# the classic table the bounding-circle test of each is cheaper than walking a grid (measured).
+MIN_GRID_ELEMENTS = 96
 
 
 class Geometry(NamedTuple):
@@ -38,6 +42,10 @@ class Geometry(NamedTuple):
     flipper_props: np.ndarray  # (F, PROP_SIZE) float64 (kick 0)
     sensors: np.ndarray  # (K, 4) float64: x0, y0, x1, y1 [m]
     sensor_drain: np.ndarray  # (K,) bool
+    # The broad phase (see build_grid): for each grid cell the segments and circles whose
+    # bounding box overlaps it, packed as [cell starts (cells + 1) | ids | first and last column
+    # and row of each element (S + C, 4)], int64. The cell size and count are in Settings.
+    grid: np.ndarray
 
 
 class Settings(NamedTuple):
@@ -51,6 +59,9 @@ class Settings(NamedTuple):
     max_passes: int  # contact passes per substep
     skin: float  # distance left between ball and surface after a contact [m]
     resting_speed: float  # normal speed below which a contact is inelastic [m/s]
+    grid_cell: float  # broad-phase cell size [m]
+    grid_columns: int  # broad-phase cells across and up the playfield (1 x 1: no broad phase)
+    grid_rows: int
 
 
 class State(NamedTuple):
@@ -102,6 +113,44 @@ def first_sensor(geometry):
 def element_count(geometry):
     """Number of elements, solid and sensors."""
     return first_sensor(geometry) + geometry.sensors.shape[0]
+
+
+def grid_layout(n_elements: int, width: float, height: float, radius: float) -> tuple:
+    """``(cell, columns, rows)`` of the broad-phase grid of a table: cells about two balls wide,
+    at least 16 across the narrower side; one cell (no broad phase) for fewer than
+    MIN_GRID_ELEMENTS segments and circles."""
+    if n_elements < MIN_GRID_ELEMENTS:
+        return max(width, height), 1, 1
+    cell = max(min(width, height) / 16.0, 2.0 * radius)
+    return cell, max(1, math.ceil(width / cell)), max(1, math.ceil(height / cell))
+
+
+def build_grid(
+    segments: np.ndarray, circles: np.ndarray, cell: float, columns: int, rows: int
+) -> np.ndarray:
+    """The packed broad-phase grid (see :class:`Geometry`): each segment and circle is listed,
+    in id order, in every cell its bounding box overlaps."""
+    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    circles = np.asarray(circles, dtype=np.float64).reshape(-1, 3)
+    low = np.concatenate(
+        [np.minimum(segments[:, :2], segments[:, 2:]), circles[:, :2] - circles[:, 2:]]
+    )
+    high = np.concatenate(
+        [np.maximum(segments[:, :2], segments[:, 2:]), circles[:, :2] + circles[:, 2:]]
+    )
+    spans = np.empty((len(low), 4), dtype=np.int64)
+    spans[:, 0] = np.clip(np.floor(low[:, 0] / cell), 0, columns - 1)
+    spans[:, 1] = np.clip(np.floor(high[:, 0] / cell), 0, columns - 1)
+    spans[:, 2] = np.clip(np.floor(low[:, 1] / cell), 0, rows - 1)
+    spans[:, 3] = np.clip(np.floor(high[:, 1] / cell), 0, rows - 1)
+    members: list[list[int]] = [[] for _ in range(columns * rows)]
+    for element, (c0, c1, r0, r1) in enumerate(spans):
+        for row in range(r0, r1 + 1):
+            for column in range(c0, c1 + 1):
+                members[row * columns + column].append(element)
+    starts = np.cumsum([0] + [len(m) for m in members])
+    items = [e for m in members for e in m]
+    return np.concatenate([starts, np.array(items, dtype=np.int64), spans.ravel()]).astype(np.int64)
 
 
 def segment_bounds(segments: np.ndarray) -> np.ndarray:

@@ -71,6 +71,8 @@ MIN_PROGRESS = 1e-9
 MAX_STALLED_PASSES = 4
 # Flipper contacts are found within this fraction of the skin from the surface.
 FLIPPER_TOLERANCE = 0.25
+# A sweep whose box covers more broad-phase cells than this tests every element instead.
+MAX_GRID_CELLS = 64
 
 
 # --- contact response and the rules of a contact -------------------------------------------------
@@ -215,6 +217,18 @@ def flipper_end(start, target, omega, stop, held, held_time, h):
 
 
 @njit(cache=True)
+def segment_contact(x, y, dx, dy, r, travel, x0, y0, x1, y1, bx, by, br, one_sided):
+    """:func:`sweep_segment`, after a cheap test: a segment whose bounding circle (bx, by, br)
+    is out of the sweep's reach (``travel`` its length) cannot be touched (``t = inf``)."""
+    mx = x - bx
+    my = y - by
+    reach = r + travel + br
+    if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
+        return INF, 0.0, 0.0  # the margin covers rounding in this test
+    return sweep_segment(x, y, dx, dy, r, x0, y0, x1, y1, one_sided)
+
+
+@njit(cache=True)
 def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_one_sided, circles):
     """Earliest contact of a ball sweeping from (x, y) by (dx, dy) with the walls and posts.
 
@@ -228,14 +242,9 @@ def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_o
     best = -1
     travel = math.sqrt(dx * dx + dy * dy)
     for j in range(segments.shape[0]):
-        mx = x - segment_bounds[j, 0]
-        my = y - segment_bounds[j, 1]
-        reach = r + travel + segment_bounds[j, 2]
-        if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
-            continue  # cannot touch: the margin covers rounding in this test
-        t, nx, ny = sweep_segment(
-            x, y, dx, dy, r,
-            segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3],
+        t, nx, ny = segment_contact(
+            x, y, dx, dy, r, travel, segments[j, 0], segments[j, 1], segments[j, 2],
+            segments[j, 3], segment_bounds[j, 0], segment_bounds[j, 1], segment_bounds[j, 2],
             segment_one_sided[j],
         )  # fmt: skip
         if t < best_t:
@@ -245,6 +254,55 @@ def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_o
         t, nx, ny = sweep_circle(x, y, dx, dy, r, circles[j, 0], circles[j, 1], circles[j, 2])
         if t < best_t:
             best_t, best_nx, best_ny, best = t, nx, ny, offset + j
+    return best_t, best_nx, best_ny, best
+
+
+@njit(cache=True)
+def grid_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles, grid, settings):
+    """:func:`earliest_static_contact` through the broad phase: only the segments and circles
+    listed in the grid cells that the sweep's bounding box (grown by the ball's radius)
+    overlaps are tested, each once (in the first of those cells that lists it). A sweep over
+    more than MAX_GRID_CELLS cells, or not finite, tests every element. The contacts are
+    bitwise those of testing every element: each test is the same computation, and ties go
+    to the lowest id either way."""
+    grow = r * (1.0 + 1e-9) + 1e-9  # the margin covers rounding in the box
+    lo_x, hi_x = min(x, x + dx) - grow, max(x, x + dx) + grow
+    lo_y, hi_y = min(y, y + dy) - grow, max(y, y + dy) + grow
+    columns, rows, size = settings.grid_columns, settings.grid_rows, settings.grid_cell
+    if not math.isfinite(lo_x + hi_x + lo_y + hi_y):
+        return earliest_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles)
+    c0 = min(max(math.floor(lo_x / size), 0), columns - 1)
+    c1 = min(max(math.floor(hi_x / size), 0), columns - 1)
+    r0 = min(max(math.floor(lo_y / size), 0), rows - 1)
+    r1 = min(max(math.floor(hi_y / size), 0), rows - 1)
+    if (c1 - c0 + 1) * (r1 - r0 + 1) > MAX_GRID_CELLS:
+        return earliest_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles)
+    items = columns * rows + 1  # the packed grid: starts, then ids, then spans
+    spans = items + grid[columns * rows]
+    n_segments = segments.shape[0]
+    travel = math.sqrt(dx * dx + dy * dy)
+    best_t, best_nx, best_ny, best = INF, 0.0, 0.0, -1
+    for row in range(r0, r1 + 1):
+        for column in range(c0, c1 + 1):
+            cell = row * columns + column
+            for k in range(grid[cell], grid[cell + 1]):
+                e = grid[items + k]
+                first_column, first_row = grid[spans + 4 * e], grid[spans + 4 * e + 2]
+                if column != max(c0, first_column) or row != max(r0, first_row):
+                    continue  # tested in an earlier cell of the box
+                if e < n_segments:
+                    t, nx, ny = segment_contact(
+                        x, y, dx, dy, r, travel, segments[e, 0], segments[e, 1],
+                        segments[e, 2], segments[e, 3], bounds[e, 0], bounds[e, 1],
+                        bounds[e, 2], one_sided[e],
+                    )  # fmt: skip
+                else:
+                    c = e - n_segments
+                    t, nx, ny = sweep_circle(
+                        x, y, dx, dy, r, circles[c, 0], circles[c, 1], circles[c, 2]
+                    )
+                if t < best_t or (t == best_t and e < best):
+                    best_t, best_nx, best_ny, best = t, nx, ny, e
     return best_t, best_nx, best_ny, best
 
 
@@ -386,6 +444,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     one_sided, circles = geometry.segment_one_sided, geometry.circles
     flippers, sensors = geometry.flippers, geometry.sensors
     n_flippers = flippers.shape[0]
+    broad_phase = settings.grid_columns * settings.grid_rows > 1
     angle, omega = state.flipper_angle, state.flipper_omega
     targets, omegas, stops = scratch.targets[env], scratch.omegas[env], scratch.stops[env]
     angles, pass_stops = scratch.angles[env], scratch.pass_stops[env]
@@ -418,9 +477,16 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 for j in range(n_flippers):
                     angles[j] = flipper_angle_at(angle[env, j], omegas[j], stops[j], elapsed)
                     pass_stops[j] = max(stops[j] - elapsed, 0.0)
-                t, nx, ny, element = earliest_static_contact(
-                    x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided, circles
-                )
+                if broad_phase:
+                    t, nx, ny, element = grid_static_contact(
+                        x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
+                        circles, geometry.grid, settings,
+                    )  # fmt: skip
+                else:
+                    t, nx, ny, element = earliest_static_contact(
+                        x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
+                        circles,
+                    )  # fmt: skip
                 svx = svy = 0.0
                 cut = False
                 if n_flippers > 0:

@@ -21,7 +21,15 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env.physics import Geometry, Settings, columns, flipper_distance, segment_bounds
+from pinball_env.physics import (
+    Geometry,
+    Settings,
+    build_grid,
+    columns,
+    flipper_distance,
+    grid_layout,
+    segment_bounds,
+)
 from pinball_env.table.reachable import CELL, free_space, touches
 
 # The flipper buttons, in the order of the columns of a buttons array (and of the bits of a
@@ -265,12 +273,20 @@ class Table:
             flipper_props=_frozen_array(flipper_props, np.float64, props),
             sensors=_frozen_array([s.segment for s in self.sensors], np.float64, (-1, 4)),
             sensor_drain=_frozen_array([s.drain for s in self.sensors], np.bool_, (-1,)),
+            grid=_frozen_array(
+                build_grid(segments, circles, *self._grid_layout()), np.int64, (-1,)
+            ),
         )
+
+    def _grid_layout(self) -> tuple[float, int, int]:
+        n_elements = sum(len(wall.segments()) for wall in self.walls) + len(self.posts)
+        return grid_layout(n_elements, self.width, self.height, self.ball.radius)
 
     def pack_settings(self) -> Settings:
         """The kernel's simulation scalars for this table."""
         sim = self.simulation
         gravity_x, gravity_y = self.gravity_vector
+        cell, columns, rows = self._grid_layout()
         return Settings(
             gravity_x=gravity_x,
             gravity_y=gravity_y,
@@ -280,6 +296,9 @@ class Table:
             max_passes=sim.max_passes,
             skin=sim.skin,
             resting_speed=sim.resting_speed,
+            grid_cell=cell,
+            grid_columns=columns,
+            grid_rows=rows,
         )
 
     def _props(self, material: str, kick: float) -> list[float]:
