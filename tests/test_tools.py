@@ -8,13 +8,20 @@ from pinball_env.tools import benchmark, plot
 
 def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
     out = tmp_path / "bench.json"
-    result = benchmark.main(
-        ["--envs", "4", "--frames", "5", "--env-steps", "20", "--json", str(out)]
-    )
+    result = benchmark.main(["--quick", "--json", str(out)])
     saved = json.loads(out.read_text())
-    for key in ("ns_per_ball_element_test", "ball_frames_per_second", "env_rgb_steps_per_second"):
-        assert saved[key] == result[key] > 0
-    assert "ns_per_ball_element_test" in capsys.readouterr().out
+    for key in (
+        "single_swept_steps_per_second",
+        "sync8_pymunk_steps_per_second",
+        "native1024_2thread_steps_per_second",
+        "native256_grayscale_2thread_steps_per_second",
+        "cartpole_vec1024_steps_per_second",
+        "kernel_ns_per_ball_element_test",
+        "startup_warm_seconds",
+        "ratio_native1024_2thread_to_sync8_pymunk",
+    ):
+        assert saved[key] == result[key] > 0, key
+    assert "native4096_1thread_steps_per_second" in capsys.readouterr().out
 
 
 def test_draw_renders_tables_and_traces(tmp_path):
