@@ -31,15 +31,22 @@ CELL = 0.001  # [m] grid spacing
 
 
 @njit(cache=True)
+def _cells_near(x0, y0, x1, y1, reach, cell, n_rows, n_cols):
+    """Rows r0:r1 and columns c0:c1 of the cells around segment P0-P1 grown by ``reach``."""
+    c0 = max(int((min(x0, x1) - reach) / cell), 0)
+    c1 = min(int((max(x0, x1) + reach) / cell) + 1, n_cols)
+    r0 = max(int((min(y0, y1) - reach) / cell), 0)
+    r1 = min(int((max(y0, y1) + reach) / cell) + 1, n_rows)
+    return r0, r1, c0, c1
+
+
+@njit(cache=True)
 def _block_segments(blocked, segments, reach, cell):
     """Mark the cells whose centre is within ``reach`` of a segment."""
     n_rows, n_cols = blocked.shape
     for k in range(segments.shape[0]):
         x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
-        c0 = max(int((min(x0, x1) - reach) / cell), 0)
-        c1 = min(int((max(x0, x1) + reach) / cell) + 1, n_cols)
-        r0 = max(int((min(y0, y1) - reach) / cell), 0)
-        r1 = min(int((max(y0, y1) + reach) / cell) + 1, n_rows)
+        r0, r1, c0, c1 = _cells_near(x0, y0, x1, y1, reach, cell, n_rows, n_cols)
         for row in range(r0, r1):
             y = (row + 0.5) * cell
             for col in range(c0, c1):
@@ -150,10 +157,7 @@ def touches(reached, segments, reach, cell):
     n_rows, n_cols = reached.shape
     for k in range(segments.shape[0]):
         x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
-        c0 = max(int((min(x0, x1) - reach) / cell), 0)
-        c1 = min(int((max(x0, x1) + reach) / cell) + 1, n_cols)
-        r0 = max(int((min(y0, y1) - reach) / cell), 0)
-        r1 = min(int((max(y0, y1) + reach) / cell) + 1, n_rows)
+        r0, r1, c0, c1 = _cells_near(x0, y0, x1, y1, reach, cell, n_rows, n_cols)
         for row in range(r0, r1):
             for col in range(c0, c1):
                 if reached[row, col]:
