@@ -80,7 +80,7 @@ class PymunkWorld(World):
 
     def __getstate__(self) -> dict[str, Any]:
         # Spaces hold callbacks into this object; they are rebuilt from the state arrays.
-        state = self.__dict__.copy()
+        state = super().__getstate__()
         state["_spaces"] = []
         return state
 
