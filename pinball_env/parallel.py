@@ -47,5 +47,11 @@ class EnvThreads:
         first = kernel(*args, *ranges[0])
         return [first, *(future.result() for future in futures)]
 
+    def close(self) -> None:
+        """Stop the threads (a later run starts new ones)."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
     def __getstate__(self) -> dict[str, Any]:
         return {"num_threads": self.num_threads, "_pool": None}

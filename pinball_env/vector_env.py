@@ -66,7 +66,11 @@ class PinballVectorEnv(VectorEnv):
 
     Arrays over the envs, each with a ``_key`` mask: ``ball_position`` (N, 2), ``ball_velocity``
     (N, 2), ``score``, ``balls_left``, ``points`` (this step) and ``drained``; when episodes
-    end, ``episode`` = ``{"r": return, "l": length}`` masked by ``_episode``.
+    end, ``episode_return`` and ``episode_length`` masked by the envs that ended (the key
+    ``episode`` is left to Gymnasium's ``RecordEpisodeStatistics``). In SAME_STEP mode,
+    ``final_obs`` (an object array) and ``final_info`` (arrays with their own ``_key`` masks)
+    hold the ended envs' last observation and info, as ``SyncVectorEnv`` does. The per-step
+    ``events`` of the single env are not batched.
 
     ``reset(seed=s)`` seeds env i with ``s + i`` (or a list gives one seed per env), so env i
     plays exactly as ``gym.make("Pinball-v0")`` reset with that seed and given the same actions.
@@ -160,7 +164,7 @@ class PinballVectorEnv(VectorEnv):
         self._lengths[envs] = 0
         self._ended[envs] = False
         self._reset_done = True
-        return self._observe(), self._infos()
+        return self._observe(), self._infos(envs)
 
     def step(
         self, actions: Any
@@ -172,7 +176,7 @@ class PinballVectorEnv(VectorEnv):
             self.game.new_game(int(env), self._rngs[env])
             self._returns[env] = 0.0
             self._lengths[env] = 0
-        try:  # the game checks the actions, before anything changes
+        try:  # the game checks the actions, before it steps
             reward, game_over = self.game.step(actions, self._rngs, frozen=restart)
         except InvalidActions as error:
             raise ValueError(f"{error} (the action space is {self.action_space})") from None
@@ -186,11 +190,9 @@ class PinballVectorEnv(VectorEnv):
         ended = terminated | truncated
         obs, infos = self._observe(), self._infos()
         if ended.any():
-            infos["episode"] = {
-                "r": np.where(ended, self._returns, 0.0),
-                "l": np.where(ended, lengths, 0),
-            }
-            infos["_episode"] = ended.copy()
+            infos["episode_return"] = np.where(ended, self._returns, 0.0)
+            infos["episode_length"] = np.where(ended, lengths, 0)
+            infos["_episode_return"] = infos["_episode_length"] = ended.copy()
         if self.autoreset_mode == AutoresetMode.SAME_STEP and ended.any():
             obs, infos = self._reset_same_step(ended, obs, infos)
             ended[:] = False
@@ -207,6 +209,10 @@ class PinballVectorEnv(VectorEnv):
             render_frame(self._frame_renderer, self.game, env) for env in range(self.num_envs)
         )
 
+    def close_extras(self, **kwargs: Any) -> None:
+        """Stop the threads that step the envs."""
+        self.game.world.threads.close()
+
     # --- helpers ------------------------------------------------------------------------------
 
     def _observe(self) -> np.ndarray:
@@ -218,9 +224,13 @@ class PinballVectorEnv(VectorEnv):
             grayscale=self.obs_type == "grayscale", threads=world.threads,
         )  # fmt: skip
 
-    def _infos(self) -> dict[str, Any]:
+    def _infos(self, envs: np.ndarray | None = None) -> dict[str, Any]:
+        """The infos, masked to ``envs`` (default: all)."""
         infos = self.game.infos()
         mask = np.ones(self.num_envs, dtype=bool)
+        if envs is not None:
+            mask = np.zeros(self.num_envs, dtype=bool)
+            mask[envs] = True
         for key in list(infos):
             infos[f"_{key}"] = mask
         return infos
@@ -229,8 +239,14 @@ class PinballVectorEnv(VectorEnv):
         self, ended: np.ndarray, obs: np.ndarray, infos: dict[str, Any]
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """SAME_STEP: reset the envs that ended, keeping their last observation and info."""
-        final_obs = obs.copy()
-        final_info = {key: value for key, value in infos.items() if not key.startswith("_")}
+        final_obs = np.empty(self.num_envs, dtype=object)
+        final_info: dict[str, np.ndarray] = {}
+        for key, value in infos.items():
+            if not key.startswith("_"):
+                final_info[key] = np.where(ended.reshape(-1, *[1] * (value.ndim - 1)), value, 0)
+                final_info[f"_{key}"] = ended.copy()
+        for env in np.flatnonzero(ended):
+            final_obs[env] = obs[env].copy()
         for env in np.flatnonzero(ended):
             self.game.new_game(int(env), self._rngs[env])
         self._returns[ended] = 0.0
@@ -240,15 +256,16 @@ class PinballVectorEnv(VectorEnv):
             {"final_obs": final_obs, "_final_obs": ended.copy(), "final_info": final_info,
              "_final_info": ended.copy()}
         )  # fmt: skip
-        if "episode" in infos:
-            infos_after["episode"], infos_after["_episode"] = infos["episode"], infos["_episode"]
+        for key in ("episode_return", "episode_length"):
+            if key in infos:
+                infos_after[key], infos_after[f"_{key}"] = infos[key], infos[f"_{key}"]
         return obs, infos_after
 
     def _mask_envs(self, mask: Any) -> np.ndarray:
         mask = np.asarray(mask)
-        if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+        if mask.shape != (self.num_envs,) or mask.dtype != np.bool_ or not mask.any():
             raise ValueError(
-                f"options['reset_mask'] must be ({self.num_envs},) booleans, "
+                f"options['reset_mask'] must be ({self.num_envs},) booleans, at least one true, "
                 f"got shape {mask.shape} dtype {mask.dtype}"
             )
         return np.flatnonzero(mask)

@@ -39,6 +39,9 @@ def test_seeding_attributes_and_images():
     assert len(env.get_images()) == 2 and env.get_images()[0].ndim == 3
     with pytest.raises(TypeError, match="PinballVectorEnv"):
         SB3VecEnv(gym.vector.SyncVectorEnv([lambda: gym.make("Pinball-v0")]))
+    wrapped = gym.wrappers.vector.ClipReward(gym.make_vec("Pinball-v0", num_envs=2), 0.0, 0.001)
+    with pytest.raises(TypeError, match="would be bypassed"):
+        SB3VecEnv(wrapped)
 
 
 @pytest.mark.parametrize("algorithm", ["PPO", "DQN"])

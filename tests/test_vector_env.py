@@ -84,7 +84,8 @@ def test_same_step_autoreset_keeps_the_final_observation():
             assert infos["_final_obs"][0]
             assert infos["final_obs"][0].tobytes() == obs1.tobytes()
             assert infos["final_info"]["score"][0] == info1["score"]
-            assert infos["_episode"][0] and infos["episode"]["l"][0] == step + 1 - 0
+            assert infos["_episode_length"][0] and infos["episode_length"][0] == step + 1
+            assert infos["final_info"]["_score"][0] and not infos["final_info"]["_score"][1]
             obs1, _ = single.reset()
             assert obs[0].tobytes() == obs1.tobytes()  # already the next episode
             return
@@ -99,9 +100,17 @@ def test_episode_statistics_and_the_time_limit():
         _, reward, terminated, truncated, infos = env.step(np.zeros(4, dtype=np.int64))
         total += reward
     assert truncated.all() and not terminated.any()
-    assert infos["_episode"].all()
-    np.testing.assert_array_equal(infos["episode"]["l"], [50] * 4)
-    np.testing.assert_array_equal(infos["episode"]["r"], total)
+    assert infos["_episode_length"].all()
+    np.testing.assert_array_equal(infos["episode_length"], [50] * 4)
+    np.testing.assert_array_equal(infos["episode_return"], total)
+    # Gymnasium's own episode statistics go on top without a clash.
+    stats = gym.wrappers.vector.RecordEpisodeStatistics(
+        gym.make_vec("Pinball-v0", num_envs=2, max_episode_steps=5)
+    )
+    stats.reset(seed=0)
+    for _ in range(5):
+        *_, infos = stats.step(np.zeros(2, dtype=np.int64))
+    assert infos["_episode"].all() and (infos["episode"]["l"] == 5).all()
     _, reward, terminated, truncated, _ = env.step(np.zeros(4, dtype=np.int64))
     assert not (terminated | truncated).any() and not reward.any()  # the autoreset step
 
@@ -111,11 +120,22 @@ def test_reset_mask_resets_only_the_masked_envs():
     env.reset(seed=0)
     for _ in range(30):
         obs, *_ = env.step(np.ones(3, dtype=np.int64))
-    again, _ = env.reset(options={"reset_mask": np.array([False, True, False])})
+    again, infos = env.reset(options={"reset_mask": np.array([False, True, False])})
     assert again[0].tobytes() == obs[0].tobytes() and again[2].tobytes() == obs[2].tobytes()
     assert again[1].tobytes() != obs[1].tobytes()
-    with pytest.raises(ValueError, match="reset_mask"):
-        env.reset(options={"reset_mask": [1, 0, 0]})
+    assert infos["_score"].tolist() == [False, True, False]
+    for mask in ([1, 0, 0], np.zeros(3, dtype=bool)):
+        with pytest.raises(ValueError, match="reset_mask"):
+            env.reset(options={"reset_mask": mask})
+
+
+def test_close_stops_the_threads():
+    env = gym.make_vec("Pinball-v0", num_envs=64, num_threads=2)
+    env.reset(seed=0)
+    env.step(np.zeros(64, dtype=np.int64))
+    assert env.game.world.threads._pool is not None
+    env.close()
+    assert env.game.world.threads._pool is None
 
 
 @pytest.mark.parametrize(

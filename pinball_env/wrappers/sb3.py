@@ -31,18 +31,21 @@ except ImportError as error:  # pragma: no cover - depends on the install
 class SB3VecEnv(VecEnv):
     """A stable-baselines3 ``VecEnv`` over a :class:`PinballVectorEnv`.
 
-    The vector env is switched to ``SAME_STEP`` autoreset (before its first step). Infos are a
-    dict per env: the single env's keys, plus ``terminal_observation``,
-    ``TimeLimit.truncated`` and ``episode`` (``r``, ``l``, ``t``, as SB3's ``Monitor`` writes
-    them) when its episode ends. ``seed(s)`` seeds env i with ``s + i`` at the next reset.
-    ``get_attr``, ``set_attr`` and ``env_method`` act on the one vector env, whose attributes
-    every env shares.
+    The vector env is switched to ``SAME_STEP`` autoreset (before its first step). Give it the
+    bare vector env: Gymnasium vector wrappers would be bypassed (use SB3's ``VecEnv`` wrappers,
+    such as ``VecNormalize``, around this one). Infos are a dict per env: the vector env's info
+    keys, ``TimeLimit.truncated`` every step, and ``terminal_observation`` and ``episode``
+    (``r``, ``l``, ``t``, as SB3's ``Monitor`` writes them) when its episode ends. ``seed(s)``
+    seeds env i with ``s + i`` at the next reset. ``get_attr``, ``set_attr`` and
+    ``env_method`` act on the one vector env, whose attributes every env shares.
     """
 
     def __init__(self, venv: PinballVectorEnv) -> None:
-        venv = getattr(venv, "unwrapped", venv)
         if not isinstance(venv, PinballVectorEnv):
-            raise TypeError(f"SB3VecEnv wraps a PinballVectorEnv, got {type(venv).__name__}")
+            raise TypeError(
+                f"SB3VecEnv wraps a bare PinballVectorEnv (gym.make_vec('Pinball-v0', ...)), got "
+                f"{type(venv).__name__}: a wrapper around it would be bypassed"
+            )
         venv.autoreset_mode = AutoresetMode.SAME_STEP
         venv.metadata = {**venv.metadata, "autoreset_mode": AutoresetMode.SAME_STEP}
         self.venv = venv
@@ -66,15 +69,20 @@ class SB3VecEnv(VecEnv):
         obs, rewards, terminated, truncated, infos = self.venv.step(self._actions)
         dones = terminated | truncated
         per_env = _per_env(infos, self.num_envs)
+        for env in range(self.num_envs):
+            per_env[env]["TimeLimit.truncated"] = bool(truncated[env] and not terminated[env])
         for env in np.flatnonzero(dones):
             # The last step of the episode (the env has been reset since).
-            info = per_env[env] = {key: value[env] for key, value in infos["final_info"].items()
-                                   if isinstance(value, np.ndarray)}  # fmt: skip
+            final = infos["final_info"]
+            info = per_env[env] = {
+                key: value[env] for key, value in final.items()
+                if isinstance(value, np.ndarray) and not key.startswith("_")
+            }  # fmt: skip
             info["terminal_observation"] = infos["final_obs"][env]
             info["TimeLimit.truncated"] = bool(truncated[env] and not terminated[env])
             info["episode"] = {
-                "r": float(infos["episode"]["r"][env]),
-                "l": int(infos["episode"]["l"][env]),
+                "r": round(float(infos["episode_return"][env]), 6),
+                "l": int(infos["episode_length"][env]),
                 "t": round(time.perf_counter() - self._start, 6),
             }
         return obs, rewards.astype(np.float32), dones, per_env
