@@ -58,6 +58,7 @@ from pinball_env.physics.sweep import (
     INF,
     norm,
     point_segment_distance,
+    segment_offset,
     sweep_circle,
     sweep_segment,
 )
@@ -71,6 +72,8 @@ MIN_PROGRESS = 1e-9
 MAX_STALLED_PASSES = 4
 # Flipper contacts are found within this fraction of the skin from the surface.
 FLIPPER_TOLERANCE = 0.25
+# Rounds of pushing a wedged ball out of the surfaces around it (see settle).
+SETTLE_ROUNDS = 8
 # A sweep whose box covers more broad-phase cells than this tests every element instead.
 MAX_GRID_CELLS = 64
 
@@ -409,16 +412,58 @@ def unwedge(x, y, a, ax, ay, b, bx, by, geometry, angles, r, skin):
 
 
 @njit(cache=True)
-def release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held):
+def release_wedge(x, y, r, flippers, omegas, stops, held_time, pushers, held):
     """A wedged ball (time left in its substep after the pass cap or the progress rule) has
     the rest of the substep dropped; so has every flipper that is still moving ``held_time``
     into it and could reach the ball, or it would sweep through the ball unchecked. Marks
-    those in ``held``; returns whether the ball is pinched: the flipper that last pushed into
-    it (``pusher``, -1 for none) is held, stalled against it as a real coil would be."""
+    those in ``held``; returns whether the ball is pinched: a flipper that pushed into it in
+    this substep (bit j of ``pushers``) is held, stalled against it as a real coil would be."""
+    pinched = False
     for j in range(flippers.shape[0]):
         near = norm(x - flippers[j, FLIPPER_PIVOT_X], y - flippers[j, FLIPPER_PIVOT_Y])
         held[j] = near <= reach_of(flippers[j]) + r and omegas[j] != 0.0 and stops[j] > held_time
-    return pusher >= 0 and held[pusher]
+        pinched = pinched or (held[j] and (pushers >> j) & 1 == 1)
+    return pinched
+
+
+@njit(cache=True)
+def settle(x, y, geometry, angles, r, skin):
+    """Push the ball out of every two-sided wall, post and flipper (at ``angles``) that it
+    overlaps, in rounds until it overlaps none by more than half the skin or SETTLE_ROUNDS
+    have passed (projected Gauss-Seidel): a wedged ball among three or more surfaces, which
+    :func:`unwedge` (two at a time) cannot clear. Run only for a wedged ball."""
+    segments, circles, flippers = geometry.segments, geometry.circles, geometry.flippers
+    target = r + skin
+    for _ in range(SETTLE_ROUNDS):
+        moved = False
+        for j in range(segments.shape[0] + circles.shape[0] + flippers.shape[0]):
+            if j < segments.shape[0]:
+                if geometry.segment_one_sided[j]:
+                    continue  # a ball may lie partly through a gate
+                s = segments[j]
+                gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
+                d = norm(gx, gy)
+                nx, ny = (gx / d, gy / d) if d > 0.0 else (0.0, 0.0)
+            elif j < segments.shape[0] + circles.shape[0]:
+                c = circles[j - segments.shape[0]]
+                gx, gy = x - c[0], y - c[1]
+                d = norm(gx, gy)
+                nx, ny = (gx / d, gy / d) if d > 0.0 else (0.0, 0.0)
+                d -= c[2]
+            else:
+                k = j - segments.shape[0] - circles.shape[0]
+                f = flippers[k]
+                d, nx, ny = flipper_distance(
+                    x, y, f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y], f[FLIPPER_LENGTH],
+                    f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS], angles[k],
+                )  # fmt: skip
+            if d < target - 0.5 * skin and (nx != 0.0 or ny != 0.0):
+                x += nx * (target - d)
+                y += ny * (target - d)
+                moved = True
+        if not moved:
+            break
+    return x, y
 
 
 @njit(cache=True, inline="always")
@@ -466,7 +511,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             vy += settings.gravity_y * h
             remaining = h
             stalled = n_hits = 0
-            pusher = -1  # the last flipper that pushed into the ball
+            pushers = 0  # bit j: flipper j pushed into the ball in this substep
             cut = False
             # The last two different elements touched, and their normals (for a wedge).
             last, last_nx, last_ny, before, before_nx, before_ny = -1, 0.0, 0.0, -1, 0.0, 0.0
@@ -549,7 +594,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     hit_elements[n_hits] = element
                     n_hits += 1
                 if element >= flipper_id and svx * nx + svy * ny > 0.0:
-                    pusher = element - flipper_id
+                    pushers |= 1 << (element - flipper_id)
                 stalled = stalled + 1 if used <= MIN_PROGRESS * h else 0
                 if stalled >= MAX_STALLED_PASSES:
                     break
@@ -561,13 +606,17 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                         angles, r, settings.skin,
                     )  # fmt: skip
                 held_time = h - remaining
-                pinched = release_wedge(x, y, r, flippers, omegas, stops, held_time, pusher, held)
+                pinched = release_wedge(x, y, r, flippers, omegas, stops, held_time, pushers, held)
                 if pinched and not cut:
-                    # The pinched ball is at rest, and its pinch is no hit. The flipper that
-                    # pinches it stays where it started the substep: moving on to where it met
-                    # the ball, it would squeeze into the ball a little further each time.
+                    # The pinched ball is at rest, and its pinch is no hit. The flippers that
+                    # pinch it stay where they started the substep: moving on to where they
+                    # met the ball, they would squeeze into it a little further each time.
                     vx = vy = spin = 0.0
-                    stops[pusher] = 0.0
+                    for j in range(n_flippers):
+                        if held[j] and (pushers >> j) & 1 == 1:
+                            stops[j] = 0.0
+                if not cut:
+                    x, y = settle(x, y, geometry, angles, r, settings.skin)
                 pinched = pinched and not cut
             if not pinched:
                 for n in range(n_hits):
