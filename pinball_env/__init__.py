@@ -6,6 +6,7 @@ Importing the package registers ``Pinball-v0`` with Gymnasium::
     import pinball_env  # noqa: F401
 
     env = gym.make("Pinball-v0", table="classic", obs_type="state")
+    envs = gym.make_vec("Pinball-v0", num_envs=1024)  # the native vector env, PinballVectorEnv
 """
 
 from gymnasium.envs.registration import register
