@@ -90,7 +90,8 @@ class World:
 
         Raises ValueError for a non-finite position or velocity, or a speed above
         MAX_PLACE_SPEED. (This is the physics API: tables and resets check more, see
-        ``table.check_ball_state``.)
+        ``table.check_ball_state``. A ball placed inside a wall, post or flipper is pushed out
+        as it can be; the step keeps a sound state sound, see ``deepest_overlap``.)
         """
         (x, y), (vx, vy) = position, velocity
         if not all(math.isfinite(value) for value in (x, y, vx, vy)):

@@ -19,11 +19,18 @@ import yaml
 from gymnasium.error import ResetNeeded
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numpy.testing import assert_array_equal
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
 from pinball_env.game import BALL_SEARCH_TIME, Game
-from pinball_env.physics import flipper_distance, point_segment_distance
-from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY
+from pinball_env.physics import deepest_overlap, flipper_distance, point_segment_distance
+from pinball_env.physics.columns import (
+    BALL_SPIN,
+    BALL_VX,
+    BALL_VY,
+    FLIPPER_REST_ANGLE,
+    FLIPPER_UP_ANGLE,
+)
 from pinball_env.render import SCOREBOARD_WIDTH, render_size, text_mask
 from pinball_env.table import TableError, builtin_tables_dir, load_table, table_from_dict
 from pinball_env.table.model import inside
@@ -277,6 +284,147 @@ def test_a_small_ball_between_a_resting_flipper_and_a_guide_stays_out_of_both():
     world.place_ball(0, (0.1392, 0.1383))
     for _ in range(600):
         world.step(np.array([[False, False]]))
+        assert_sound(world)
+
+
+def pocket_table(radius, walls=(), posts=(), flippers=("left_flipper", "right_flipper"), **sim):
+    """Classic's outline and flippers, no plunger, a ball of ``radius`` and the given walls and
+    posts: the pockets a reviewer built around the flippers (tables without a plunger, balls
+    placed through World)."""
+    data = classic_dict()
+    data["ball"].update(radius=radius, start=[0.2365, 0.45])
+    data["simulation"].update(sim)
+    data["walls"] = [w for w in data["walls"] if w["name"] == "outline"]
+    data["walls"] += [
+        {"name": f"w{i}", "points": points, "material": "wall"} for i, points in enumerate(walls)
+    ]
+    data["posts"] = [
+        {"name": f"p{i}", "center": centre, "radius": size, "material": "bumper"}
+        for i, (centre, size) in enumerate(posts)
+    ]
+    data["flippers"] = [f for f in data["flippers"] if f["name"] in flippers]
+    data["sensors"] = []
+    del data["plunger"]
+    return table_from_dict(data)
+
+
+POCKETS = {
+    # A big ball on both flippers, under a post the rising flippers push it into (it crept
+    # 15 um a frame into the post, to 3.3 mm).
+    "post over both flippers": (
+        dict(radius=0.02299, walls=[[[0.17498, 0.16435], [0.20293, 0.17747]]],
+             posts=[([0.22534, 0.173], 0.01811)], frame_rate=119),
+        (0.23666, 0.10969), (0.0, 0.0),
+    ),
+    # A V of walls over the left flipper, closed by it (10.6 mm into a wall).
+    "V over a flipper": (
+        dict(radius=0.02733, walls=[[[0.08337, 0.10847], [0.22736, 0.20402]],
+                                    [[0.41148, 0.1036], [0.22033, 0.17756]]],
+             flippers=("left_flipper",)),
+        (0.20624, 0.15292), (-4.263, 3.91),
+    ),
+    # A small ball under a bent wall over the left flipper (3.3 mm into the wall).
+    "bent wall over a flipper": (
+        dict(radius=0.0093, walls=[[[0.1744, 0.1513], [0.1815, 0.1649], [0.1932, 0.1623]]],
+             frame_rate=50),
+        (0.1872, 0.1537), (0.0, 0.0),
+    ),
+    # A long wall over both raised flippers, closer than a ball (1.6 mm into it).
+    "wall over both flippers": (
+        dict(radius=0.0274, walls=[[[0.1187, 0.1347], [0.3088, 0.2291]]], frame_rate=42,
+             substeps=9, max_passes=5, skin=3.4e-05),
+        (0.2262, 0.1213), (0.0, 0.0),
+    ),
+}  # fmt: skip
+STALLED = {"post over both flippers", "V over a flipper", "bent wall over a flipper"}
+
+
+@pytest.mark.parametrize("name", POCKETS)
+def test_a_pocket_that_flippers_close_on_a_ball_stalls_them(name):
+    # Found in review: among three or more surfaces no position clears them all, and the
+    # rising flippers closed the pocket a little further every frame. Now the substep that
+    # would leave the ball inside a surface is undone, and the flippers stall.
+    kwargs, position, velocity = POCKETS[name]
+    world = World(pocket_table(**kwargs))
+    world.place_ball(0, position, velocity)
+    for _ in range(120):
+        world.step(np.array([[True, True]]))
+        assert_sound(world)
+    up = world.geometry.flippers[:, FLIPPER_UP_ANGLE]
+    stalled = (world.state.flipper_angle[0] != up).any()
+    assert stalled == (name in STALLED)  # in the last pocket the ball slips out
+    for _ in range(120):  # released, the flippers fall back and free the ball
+        world.step(np.array([[False, False]]))
+        assert_sound(world)
+    rest = world.geometry.flippers[:, FLIPPER_REST_ANGLE]
+    assert_array_equal(world.state.flipper_angle[0], rest)
+
+
+def test_a_ball_is_never_nudged_through_a_wall():
+    # Found in review: clearing a ball wedged between two nearly parallel surfaces moved it
+    # 21 cm in one go, out through the outline. Moves made without a sweep are now short.
+    data = classic_dict()
+    data["ball"]["radius"] = 0.00927
+    data["simulation"] = {
+        "frame_rate": 37.47, "substeps": 14, "max_passes": 28, "skin": 3.02e-05,
+        "resting_speed": 0.0,
+    }  # fmt: skip
+    data["materials"]["wall"] = {"restitution": 0.556, "friction": 1.807}
+    data["materials"]["flipper"] = {"restitution": 0.125, "friction": 1.377}
+    data["walls"].append(
+        {"name": "x1", "points": [[0.16624, 0.14398], [0.17693, 0.15395], [0.18243, 0.15463]],
+         "material": "bumper"}
+    )  # fmt: skip
+    world = World(table_from_dict(data))
+    world.place_ball(0, (0.16962, 0.13181))
+    for _ in range(60):
+        world.step(np.array([[True, True]]))
+        assert_sound(world)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    radius=st.floats(0.004, 0.03),
+    along=st.floats(0.0, 1.0),
+    gap=st.floats(0.0003, 0.06),
+    lean=st.floats(-0.5, 0.5),
+    post=st.one_of(st.none(), st.floats(0.002, 0.02)),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_balls_in_tight_places_around_the_flippers_stay_sound(radius, along, gap, lean, post, seed):
+    # A wall (or a post of radius ``post``) ``gap`` above the raised left flipper, a fraction
+    # ``along`` of its length out (outside the swing, as the loader requires); balls placed
+    # wherever they fit near it; the buttons held for random spells.
+    pivot, length, up = np.array([0.146, 0.12]), 0.07, math.radians(25.0)
+    u = np.array([math.cos(up), math.sin(up)])  # along the raised flipper
+    v = np.array([-u[1], u[0]])  # its upper side
+    half_width = 0.0116 + (0.007 - 0.0116) * along
+    spot = pivot + length * along * u + (half_width + gap) * v
+    if post is None:
+        d = np.array([math.cos(up + lean), math.sin(up + lean)]) * 0.05
+        walls, posts = [[(spot - d).tolist(), (spot + d).tolist()]], []
+    else:
+        walls, posts = [], [((spot + post * v).tolist(), post)]
+    try:
+        table = pocket_table(radius, walls=walls, posts=posts)
+    except TableError:  # it lay in the swing, or left no room for the ball's start
+        return
+    world = World(table, n_envs=8)
+    rng = np.random.default_rng(seed)
+    angles = world.geometry.flippers[:, FLIPPER_REST_ANGLE].copy()
+    placed = 0
+    for _ in range(2000):
+        x, y = spot + rng.uniform(-0.06, 0.06, size=2)
+        if deepest_overlap(x, y, world.geometry, angles, radius) < -table.simulation.skin:
+            world.place_ball(placed, (x, y), rng.normal(0.0, 0.5, size=2))
+            placed += 1
+            if placed == 8:
+                break
+    held = np.zeros((8, 2), dtype=bool)
+    for _ in range(150):
+        flip = rng.random((8, 2)) < 0.1  # spells of about 10 frames
+        held = np.where(flip, ~held, held)
+        world.step(held)
         assert_sound(world)
 
 

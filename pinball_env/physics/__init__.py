@@ -35,7 +35,7 @@ from pinball_env.physics.flipper import (
     sweep_capsule,
     sweep_flipper,
 )
-from pinball_env.physics.step import respond, step_world
+from pinball_env.physics.step import deepest_overlap, respond, step_world
 from pinball_env.physics.sweep import (
     point_segment_distance,
     sweep_circle,
@@ -54,6 +54,7 @@ __all__ = [
     "build_grid",
     "capsule_distance",
     "capsule_face_normal",
+    "deepest_overlap",
     "element_count",
     "first_circle",
     "first_flipper",

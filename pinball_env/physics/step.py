@@ -10,7 +10,12 @@ flippers (ties go to the lowest element id: :func:`earliest_static_contact`,
 :func:`earliest_flipper_contact`), responds, and sweeps the remaining time again: the contact
 passes. A pass cap and a minimum-progress rule end the passes for a wedged ball: the rest of that
 substep is dropped, never skipped over, so the ball can stall for an instant but cannot tunnel;
-a flipper pushing a wedged ball stalls too, as a real coil does (:func:`release_wedge`). A
+a flipper pushing a wedged ball stalls too, as a real coil does (:func:`release_wedge`). Only
+a turning flipper or a wedge can leave the ball inside a surface, so after a substep in which the
+ball touched a turning flipper or was wedged, its deepest overlap is measured (:func:`deepest_overlap`); a ball deeper than the skin is pushed
+clear (:func:`settle`), and where no room is left (a pocket that turning flippers close on the
+ball) the substep is undone: the ball is put back, at rest, and the flippers that could reach
+it stall where they started it. A sound state thus stays sound, substep by substep. A
 flipper sweep that runs out of slices (an absurd speed) ends the substep the same way, so the
 work of a frame is bounded whatever the state. Sensors (rollovers, the drain) are crossed, not
 collided with: a crossing of the ball's centre is an event, and a drain crossing takes the ball
@@ -74,6 +79,9 @@ MAX_STALLED_PASSES = 4
 FLIPPER_TOLERANCE = 0.25
 # Rounds of pushing a wedged ball out of the surfaces around it (see settle).
 SETTLE_ROUNDS = 8
+# The ball is moved without a sweep (out of a wedge) by at most this fraction of its radius, so
+# that it cannot pass through a wall that it overlaps by less.
+MAX_NUDGE = 0.25
 # A sweep whose box covers more broad-phase cells than this tests every element instead.
 MAX_GRID_CELLS = 64
 
@@ -168,12 +176,13 @@ def surface_distance(x, y, element, geometry, angles):
 
 
 @njit(cache=True)
-def reach_of(flipper):
-    """Radius of the disc around a flipper's pivot (a row of ``Geometry.flippers``) that holds it
-    at any angle [m]."""
-    return flipper_reach(
+def within_reach(x, y, r, flipper):
+    """Whether a flipper (a row of ``Geometry.flippers``) can touch a ball of radius ``r`` at
+    (x, y) at some angle."""
+    reach = flipper_reach(
         flipper[FLIPPER_LENGTH], flipper[FLIPPER_BASE_RADIUS], flipper[FLIPPER_TIP_RADIUS]
     )
+    return norm(x - flipper[FLIPPER_PIVOT_X], y - flipper[FLIPPER_PIVOT_Y]) <= reach + r
 
 
 # --- the flipper schedule ------------------------------------------------------------------------
@@ -408,7 +417,10 @@ def unwedge(x, y, a, ax, ay, b, bx, by, geometry, angles, r, skin):
     det = ax * by - ay * bx
     if abs(det) < 1e-6:  # (nearly) facing surfaces closer than a ball: no room to be found
         return x, y
-    return x + (pa * by - ay * pb) / det, y + (ax * pb - bx * pa) / det
+    mx, my = (pa * by - ay * pb) / det, (ax * pb - bx * pa) / det
+    if norm(mx, my) > MAX_NUDGE * r:  # no room near here (and a long move could cross a wall)
+        return x, y
+    return x + mx, y + my
 
 
 @njit(cache=True)
@@ -420,10 +432,45 @@ def release_wedge(x, y, r, flippers, omegas, stops, held_time, pushers, held):
     this substep (bit j of ``pushers``) is held, stalled against it as a real coil would be."""
     pinched = False
     for j in range(flippers.shape[0]):
-        near = norm(x - flippers[j, FLIPPER_PIVOT_X], y - flippers[j, FLIPPER_PIVOT_Y])
-        held[j] = near <= reach_of(flippers[j]) + r and omegas[j] != 0.0 and stops[j] > held_time
+        held[j] = within_reach(x, y, r, flippers[j]) and omegas[j] != 0.0 and stops[j] > held_time
         pinched = pinched or (held[j] and (pushers >> j) & 1 == 1)
     return pinched
+
+
+@njit(cache=True)
+def separation(x, y, element, geometry, angles):
+    """Distance from the point (x, y) to the surface of a solid element (negative inside) and
+    the unit normal from the surface towards the point (zero where it is undefined), the
+    flippers at ``angles``. The same distance as :func:`surface_distance`, bitwise."""
+    j = element - first_circle(geometry)
+    if j < 0:
+        s = geometry.segments[element]
+        gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
+        d = norm(gx, gy)
+        return (d, gx / d, gy / d) if d > 0.0 else (d, 0.0, 0.0)
+    if j < geometry.circles.shape[0]:
+        c = geometry.circles[j]
+        gx, gy = x - c[0], y - c[1]
+        d = norm(gx, gy)
+        return (d - c[2], gx / d, gy / d) if d > 0.0 else (d - c[2], 0.0, 0.0)
+    f = geometry.flippers[element - first_flipper(geometry)]
+    return flipper_distance(
+        x, y, f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y], f[FLIPPER_LENGTH],
+        f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS], angles[element - first_flipper(geometry)],
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def deepest_overlap(x, y, geometry, angles, r):
+    """How deep a ball of radius ``r`` at (x, y) lies in the two-sided wall, post or flipper
+    (at ``angles``) it overlaps most [m]; 0 or less when it overlaps none."""
+    deepest = -INF
+    for element in range(first_sensor(geometry)):  # the solids
+        if element < geometry.segments.shape[0] and geometry.segment_one_sided[element]:
+            continue  # a ball may lie partly through a gate
+        d, _, _ = separation(x, y, element, geometry, angles)
+        deepest = max(deepest, r - d)
+    return deepest
 
 
 @njit(cache=True)
@@ -431,38 +478,24 @@ def settle(x, y, geometry, angles, r, skin):
     """Push the ball out of every two-sided wall, post and flipper (at ``angles``) that it
     overlaps, in rounds until it overlaps none by more than half the skin or SETTLE_ROUNDS
     have passed (projected Gauss-Seidel): a wedged ball among three or more surfaces, which
-    :func:`unwedge` (two at a time) cannot clear. Run only for a wedged ball."""
-    segments, circles, flippers = geometry.segments, geometry.circles, geometry.flippers
+    :func:`unwedge` (two at a time) cannot clear. Where the surfaces leave no room for the
+    ball near where it is, it stays inside one of them (the caller then undoes the substep)."""
     target = r + skin
+    x0, y0 = x, y
     for _ in range(SETTLE_ROUNDS):
         moved = False
-        for j in range(segments.shape[0] + circles.shape[0] + flippers.shape[0]):
-            if j < segments.shape[0]:
-                if geometry.segment_one_sided[j]:
-                    continue  # a ball may lie partly through a gate
-                s = segments[j]
-                gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
-                d = norm(gx, gy)
-                nx, ny = (gx / d, gy / d) if d > 0.0 else (0.0, 0.0)
-            elif j < segments.shape[0] + circles.shape[0]:
-                c = circles[j - segments.shape[0]]
-                gx, gy = x - c[0], y - c[1]
-                d = norm(gx, gy)
-                nx, ny = (gx / d, gy / d) if d > 0.0 else (0.0, 0.0)
-                d -= c[2]
-            else:
-                k = j - segments.shape[0] - circles.shape[0]
-                f = flippers[k]
-                d, nx, ny = flipper_distance(
-                    x, y, f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y], f[FLIPPER_LENGTH],
-                    f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS], angles[k],
-                )  # fmt: skip
+        for element in range(first_sensor(geometry)):  # the solids
+            if element < geometry.segments.shape[0] and geometry.segment_one_sided[element]:
+                continue
+            d, nx, ny = separation(x, y, element, geometry, angles)
             if d < target - 0.5 * skin and (nx != 0.0 or ny != 0.0):
                 x += nx * (target - d)
                 y += ny * (target - d)
                 moved = True
         if not moved:
             break
+    if norm(x - x0, y - y0) > MAX_NUDGE * r:  # no room near here (a long move could cross a wall)
+        return x0, y0
     return x, y
 
 
@@ -506,12 +539,14 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             )
             held[j] = False
         held_time = h
+        x0, y0 = x, y
         if state.active[env]:
             vx += settings.gravity_x * h
             vy += settings.gravity_y * h
             remaining = h
             stalled = n_hits = 0
             pushers = 0  # bit j: flipper j pushed into the ball in this substep
+            turning_contact = False  # the ball touched a turning flipper in this substep
             cut = False
             # The last two different elements touched, and their normals (for a wedge).
             last, last_nx, last_ny, before, before_nx, before_ny = -1, 0.0, 0.0, -1, 0.0, 0.0
@@ -595,6 +630,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     n_hits += 1
                 if element >= flipper_id and svx * nx + svy * ny > 0.0:
                     pushers |= 1 << (element - flipper_id)
+                if element >= flipper_id and omegas[element - flipper_id] != 0.0:
+                    turning_contact = True
                 stalled = stalled + 1 if used <= MIN_PROGRESS * h else 0
                 if stalled >= MAX_STALLED_PASSES:
                     break
@@ -615,9 +652,25 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     for j in range(n_flippers):
                         if held[j] and (pushers >> j) & 1 == 1:
                             stops[j] = 0.0
-                if not cut:
-                    x, y = settle(x, y, geometry, angles, r, settings.skin)
                 pinched = pinched and not cut
+            if state.active[env] and (remaining > 0.0 or turning_contact):
+                # Only a turning flipper or a wedge can leave the ball inside a surface: the
+                # sweeps stop it at the first. Where it is left deeper than the skin, it is
+                # settled; where the surfaces leave it no room (a pocket that turning flippers
+                # close on it), the substep is undone: the ball is back where it started it,
+                # at rest, and the flippers that could reach it stall where they started.
+                for j in range(n_flippers):
+                    angles[j], _ = flipper_end(
+                        angle[env, j], targets[j], omegas[j], stops[j], held[j], held_time, h
+                    )
+                if deepest_overlap(x, y, geometry, angles, r) > settings.skin:
+                    x, y = settle(x, y, geometry, angles, r, settings.skin)
+                if deepest_overlap(x, y, geometry, angles, r) > settings.skin:
+                    x, y, vx, vy, spin = x0, y0, 0.0, 0.0, 0.0
+                    for j in range(n_flippers):
+                        if omegas[j] != 0.0 and within_reach(x, y, r, flippers[j]):
+                            held[j], stops[j] = True, 0.0
+                    pinched = True
             if not pinched:
                 for n in range(n_hits):
                     state.hits[env, hit_elements[n]] += 1
