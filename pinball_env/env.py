@@ -41,8 +41,8 @@ class PinballEnv(gym.Env):
     | 3   | both buttons            |
 
     ``action_type="multibinary"``: ``MultiBinary(2)``, (left button, right button).
-    A button acts for the whole step (one frame, 1/60 s): held, the flipper swings up to its stop
-    and stays there; released, it falls back to rest.
+    A button acts for the whole step (one frame, 1/60 s, or ``frame_skip`` frames): held, the
+    flipper swings up to its stop and stays there; released, it falls back to rest.
 
     ## Observation Space
 
@@ -77,7 +77,7 @@ class PinballEnv(gym.Env):
     is 100 points (reward 1), a slingshot or a rollover 10 (0.1). Optional shaping, off by
     default: ``height_shaping`` times the rise of the ball during the step in table heights (a
     potential, so it sums to ``height_shaping`` times the net rise of each ball, from its launch
-    to where it drains).
+    to where it drains); ``drain_penalty`` taken off for each ball that drains.
 
     ## Starting State
 
@@ -92,7 +92,9 @@ class PinballEnv(gym.Env):
     ## Episode End
 
     Termination: the last ball drains (the game is over). Truncation: only by the ``TimeLimit``
-    wrapper, ``max_episode_steps=7200`` (two minutes of play) for ``Pinball-v0``. Every game can
+    wrapper, ``max_episode_steps=7200`` (two minutes of play) for ``Pinball-v0``; it counts
+    steps, so with ``frame_skip=k`` pass ``max_episode_steps=7200 // k`` for the same two
+    minutes. Every game can
     end: a ball in play that has not moved a ball radius in 10 s (resting in the shooter lane,
     or held in a flipper's cradle) is served again from the plunger, as a real machine's ball
     search would, without losing a ball. Stepping before the first ``reset`` raises Gymnasium's
@@ -106,8 +108,8 @@ class PinballEnv(gym.Env):
 
     ```python
     gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
-             reward_scale=0.01, height_shaping=0.0, image_size=(84, 84), physics="swept",
-             render_mode=None)
+             reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, frame_skip=1,
+             image_size=(84, 84), physics="swept", render_mode=None)
     ```
 
     - ``table``: a built-in table name (``"classic"``; the built-in tables are package data in
@@ -119,6 +121,9 @@ class PinballEnv(gym.Env):
     - ``balls``: balls per game (>= 1).
     - ``reward_scale``: reward per point.
     - ``height_shaping``: weight of the optional height shaping term (0 = off).
+    - ``drain_penalty``: reward taken off for each ball that drains (0 = off).
+    - ``frame_skip``: frames per step (1-60), the action held on each; rewards, ``points`` and
+      ``drained`` are summed over them, and a game that ends stops there.
     - ``image_size``: (height, width) of image observations, in pixels, or one int for a square.
     - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
       pymunk, for cross-checks; needs the ``crosscheck`` extra).
@@ -142,6 +147,8 @@ class PinballEnv(gym.Env):
         balls: int = 3,
         reward_scale: float = 0.01,
         height_shaping: float = 0.0,
+        drain_penalty: float = 0.0,
+        frame_skip: int = 1,
         image_size: int | tuple[int, int] = (84, 84),
         physics: str = "swept",
         render_mode: str | None = None,
@@ -152,12 +159,16 @@ class PinballEnv(gym.Env):
         self.table = table if isinstance(table, Table) else load_table(table)
         self.game = Game(
             self.table, n_envs=1, balls_per_game=balls, action_type=action_type,
-            reward_scale=reward_scale, height_shaping=height_shaping, physics=physics,
+            reward_scale=reward_scale, height_shaping=height_shaping,
+            drain_penalty=drain_penalty, frame_skip=frame_skip, physics=physics,
         )  # fmt: skip
         self.obs_type = obs_type
         self.action_type = action_type
         self.render_mode = render_mode
-        self.metadata = {**self.metadata, "render_fps": self.table.simulation.frame_rate}
+        self.metadata = {
+            **self.metadata,
+            "render_fps": self.table.simulation.frame_rate / self.game.frame_skip,
+        }
 
         self.action_space, self.observation_space = make_spaces(
             self.game, obs_type, self.image_size

@@ -35,6 +35,8 @@ RESET_OPTIONS = ("ball_position", "ball_velocity")
 # shooter lane, say, or held in a flipper's cradle) is served again from the plunger, as a real
 # machine's ball search and auto-plunger would; no ball is lost. So every game can end.
 BALL_SEARCH_TIME = 10.0
+# Most frames one step may hold an action for (a second at 60 Hz).
+MAX_FRAME_SKIP = 60
 
 
 class InvalidActions(ValueError):
@@ -71,6 +73,9 @@ class Game:
         reward_scale: reward per point.
         height_shaping: weight of the height shaping term (0 = off): the rise of the ball
             during the step, in table heights.
+        drain_penalty: reward taken off for each ball that drains (0 = off).
+        frame_skip: frames per step, the action repeated on each (rewards, points and drains
+            summed; a game that ends stops there).
         physics: the World backend, ``"swept"`` or ``"pymunk"``.
         num_threads: threads that share the envs of a frame (the swept kernel).
 
@@ -87,22 +92,34 @@ class Game:
         action_type: str = "discrete",
         reward_scale: float = 0.01,
         height_shaping: float = 0.0,
+        drain_penalty: float = 0.0,
+        frame_skip: int = 1,
         physics: str = "swept",
         num_threads: int = 1,
     ) -> None:
         check_playable(table)
         check_choice("action_type", action_type, ACTION_TYPES)
-        for name, value in (("reward_scale", reward_scale), ("height_shaping", height_shaping)):
+        weights = {
+            "reward_scale": reward_scale, "height_shaping": height_shaping,
+            "drain_penalty": drain_penalty,
+        }  # fmt: skip
+        for name, value in weights.items():
             real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
             if not real or not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
         if not _is_int(balls_per_game) or balls_per_game < 1:
             raise ValueError(f"balls must be an integer >= 1, got {balls_per_game!r}")
+        if not _is_int(frame_skip) or not 1 <= frame_skip <= MAX_FRAME_SKIP:
+            raise ValueError(
+                f"frame_skip must be an integer from 1 to {MAX_FRAME_SKIP}, got {frame_skip!r}"
+            )
         self.table = table
         self.balls_per_game = int(balls_per_game)
         self.action_type = action_type
         self.reward_scale = float(reward_scale)
         self.height_shaping = float(height_shaping)
+        self.drain_penalty = float(drain_penalty)
+        self.frame_skip = int(frame_skip)
         self.world = make_world(table, n_envs, physics, num_threads)
         self.state = GameState(
             world=self.world.state,
@@ -222,20 +239,49 @@ class Game:
         rngs: Sequence[np.random.Generator],
         frozen: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """One frame of every env with ``actions`` (see :meth:`buttons`). A drained ball is
-        replaced by the next one off the plunger (drawn from the env's ``rngs`` entry); the game
-        ends when the last ball drains. Envs where ``frozen`` (n_envs,) bool is set keep their
-        state as it is (a vector env's envs that have just been reset), with reward 0.
+        """One step of every env with ``actions`` (see :meth:`buttons`): ``frame_skip`` frames,
+        the actions held on each. A drained ball is replaced by the next one off the plunger
+        (drawn from the env's ``rngs`` entry); the game ends when the last ball drains, and an
+        env whose game ends stays as it is for the rest of the step. Envs where ``frozen``
+        (n_envs,) bool is set keep their state as it is (a vector env's envs that have just
+        been reset), with reward 0.
 
-        Returns ``(reward, game_over)``, (n_envs,) float64 and bool. The step's points and
-        drains are in :attr:`state`.
+        Returns ``(reward, game_over)``, (n_envs,) float64 and bool, the reward summed over the
+        frames. The step's points and drains (summed) are in :attr:`state`.
         """
+        if self.frame_skip == 1:
+            return self.step_frame(actions, rngs, frozen)
+        state = self.state
+        still = np.zeros(self.n_envs, dtype=bool) if frozen is None else frozen.copy()
+        total = np.zeros(self.n_envs)
+        points = np.zeros(self.n_envs, dtype=np.int64)
+        drained = np.zeros(self.n_envs, dtype=bool)
+        for _ in range(self.frame_skip):
+            reward, game_over = self.step_frame(actions, rngs, still if still.any() else None)
+            moved = ~still
+            total[moved] += reward[moved]
+            points[moved] += state.points[moved]
+            drained[moved] |= state.drained[moved]
+            still |= game_over
+            if still.all():
+                break
+        state.points[:] = points
+        state.drained[:] = drained
+        return total, state.balls_left == 0
+
+    def step_frame(
+        self,
+        actions: Any,
+        rngs: Sequence[np.random.Generator],
+        frozen: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One frame of every env: :meth:`step` with ``frame_skip`` 1."""
         if frozen is not None and frozen.any():
             envs = np.flatnonzero(frozen)
             saved = _take_rows(self.state, envs)
             # A frozen env's draws go to a copy of its stream: it must not move on either.
             rngs = [copy.deepcopy(rng) if frozen[i] else rng for i, rng in enumerate(rngs)]
-            reward, _ = self.step(actions, rngs)
+            reward, _ = self.step_frame(actions, rngs)
             _put_rows(saved, self.state, envs)
             reward[envs] = 0.0
             return reward, self.state.balls_left == 0
@@ -255,6 +301,8 @@ class Game:
         state.points[:] = points
         state.drained[:] = drained
         reward = points * self.reward_scale
+        if self.drain_penalty:
+            reward -= self.drain_penalty * drained
         if self.height_shaping:
             # A drained ball's last height is where it crossed the drain, not the next ball's.
             height_after = np.where(drained, state.drain_height, balls[:, BALL_Y])

@@ -46,7 +46,8 @@ class PinballVectorEnv(VectorEnv):
     ```python
     gym.make_vec("Pinball-v0", num_envs=1024, table="classic", obs_type="state",
                  action_type="discrete", balls=3, reward_scale=0.01, height_shaping=0.0,
-                 image_size=(84, 84), physics="swept", render_mode=None,
+                 drain_penalty=0.0, frame_skip=1, image_size=(84, 84), physics="swept",
+                 render_mode=None,
                  max_episode_steps=7200, num_threads=None, autoreset_mode="NextStep")
     ```
 
@@ -54,7 +55,8 @@ class PinballVectorEnv(VectorEnv):
 
     - ``num_envs``: games stepped together.
     - ``max_episode_steps``: truncation after this many steps of an episode (None: never);
-      ``gym.make_vec`` passes the registered 7200.
+      ``gym.make_vec`` passes the registered 7200 (with ``frame_skip=k``, pass 7200 // k for
+      the same two minutes).
     - ``num_threads``: threads that share the envs (None: one per core while each has at least
       32 envs). Results are bitwise the same for any count.
     - ``autoreset_mode``: ``NEXT_STEP`` (Gymnasium's default: an env that ended is reset by the
@@ -93,6 +95,8 @@ class PinballVectorEnv(VectorEnv):
         balls: int = 3,
         reward_scale: float = 0.01,
         height_shaping: float = 0.0,
+        drain_penalty: float = 0.0,
+        frame_skip: int = 1,
         image_size: int | tuple[int, int] = (84, 84),
         physics: str = "swept",
         render_mode: str | None = None,
@@ -117,7 +121,8 @@ class PinballVectorEnv(VectorEnv):
         threads = default_threads(self.num_envs) if num_threads is None else num_threads
         self.game = Game(
             self.table, n_envs=self.num_envs, balls_per_game=balls, action_type=action_type,
-            reward_scale=reward_scale, height_shaping=height_shaping, physics=physics,
+            reward_scale=reward_scale, height_shaping=height_shaping,
+            drain_penalty=drain_penalty, frame_skip=frame_skip, physics=physics,
             num_threads=threads if physics == "swept" else 1,
         )  # fmt: skip
         self.num_threads = self.game.world.threads.num_threads
@@ -126,7 +131,7 @@ class PinballVectorEnv(VectorEnv):
         self.max_episode_steps = max_episode_steps
         self.metadata = {
             **self.metadata,
-            "render_fps": self.table.simulation.frame_rate,
+            "render_fps": self.table.simulation.frame_rate / self.game.frame_skip,
             "autoreset_mode": self.autoreset_mode,
         }
         self.single_action_space, self.single_observation_space = make_spaces(

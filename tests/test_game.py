@@ -108,3 +108,67 @@ def test_discrete_actions_are_the_buttons_as_bits():
         assert discrete_action(buttons) == action
     assert DISCRETE_BUTTONS[1].tolist() == [True, False]  # left
     assert DISCRETE_BUTTONS[2].tolist() == [False, True]  # right
+
+
+def test_a_step_of_k_frames_is_k_frames_with_the_action_held():
+    kwargs = {"height_shaping": 0.5, "drain_penalty": 2.0, "balls_per_game": 2}
+    n, k, steps = len(SEEDS), 4, 600
+    actions = random_actions("discrete", n, steps, seed=11)
+    skipping = Game(CLASSIC, n_envs=n, frame_skip=k, **kwargs)
+    framing = Game(CLASSIC, n_envs=n, **kwargs)
+    rngs = {game: [np.random.default_rng(seed) for seed in SEEDS] for game in (skipping, framing)}
+    for game in (skipping, framing):
+        for env in range(n):
+            game.new_game(env, rngs[game][env])
+    ended = np.zeros(n, dtype=bool)
+    games_over = 0
+    for step_actions in actions:
+        reward, over = skipping.step(step_actions, rngs[skipping])
+        total = np.zeros(n)
+        points = np.zeros(n, dtype=np.int64)
+        drained = np.zeros(n, dtype=bool)
+        for _ in range(k):  # frame by frame, an env whose game is over stays as it is
+            frame_reward, frame_over = framing.step(step_actions, rngs[framing], ended.copy())
+            total += frame_reward
+            points += np.where(ended, 0, framing.state.points)
+            drained |= ~ended & framing.state.drained
+            ended |= frame_over
+        assert reward.tobytes() == total.tobytes()
+        assert (skipping.state.points == points).all()
+        assert (skipping.state.drained == drained).all()
+        assert (over == ended).all()
+        assert skipping.observe().tobytes() == framing.observe().tobytes()
+        for env in np.flatnonzero(over):
+            games_over += 1
+            for game in (skipping, framing):
+                game.new_game(env, rngs[game][env])
+        ended[:] = False
+    assert games_over > 0  # games ended inside a step
+
+
+def test_a_drained_ball_costs_the_drain_penalty():
+    game = Game(CLASSIC, n_envs=1, drain_penalty=1.5, reward_scale=0.0)
+    rng = np.random.default_rng(0)
+    game.new_game(0, rng)
+    rewards = []
+    for _ in range(7200):
+        reward, over = game.step(np.array([0]), [rng])
+        rewards.append((reward[0], game.state.drained[0]))
+        if over[0]:
+            break
+    assert {reward for reward, drained in rewards if drained} == {-1.5}
+    assert {reward for reward, drained in rewards if not drained} == {0.0}
+    assert sum(drained for _, drained in rewards) == 3
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"frame_skip": 0}, "frame_skip must be an integer from 1 to 60"),
+        ({"frame_skip": 2.5}, "frame_skip must be an integer from 1 to 60"),
+        ({"drain_penalty": float("nan")}, "drain_penalty must be a finite number"),
+    ],
+)
+def test_bad_step_options_are_rejected(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Game(CLASSIC, **kwargs)

@@ -23,6 +23,7 @@ def random_actions(space: gym.Space, steps: int, seed: int) -> list:
         {"action_type": "multibinary", "height_shaping": 0.5, "max_episode_steps": 300},
         {"obs_type": "grayscale", "image_size": 48, "balls": 1, "max_episode_steps": 200},
         {"obs_type": "rgb", "image_size": (40, 24), "max_episode_steps": 150},
+        {"frame_skip": 3, "drain_penalty": 1.0, "balls": 2, "max_episode_steps": 300},
     ],
 )
 def test_vector_env_is_bitwise_n_single_envs(kwargs):

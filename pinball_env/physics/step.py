@@ -10,12 +10,13 @@ flippers (ties go to the lowest element id: :func:`earliest_static_contact`,
 :func:`earliest_flipper_contact`), responds, and sweeps the remaining time again: the contact
 passes. A pass cap and a minimum-progress rule end the passes for a wedged ball: the rest of that
 substep is dropped, never skipped over, so the ball can stall for an instant but cannot tunnel;
-a flipper pushing a wedged ball stalls too, as a real coil does (:func:`release_wedge`). Only
-a turning flipper or a wedge can leave the ball inside a surface, so after a substep in which the
-ball touched a turning flipper or was wedged, its deepest overlap is measured (:func:`deepest_overlap`); a ball deeper than the skin is pushed
-clear (:func:`settle`), and where no room is left (a pocket that turning flippers close on the
-ball) the substep is undone: the ball is put back, at rest, and the flippers that could reach
-it stall where they started it. A sound state thus stays sound, substep by substep. A
+a flipper pushing a wedged ball stalls too, as a real coil does (:func:`release_wedge`).
+Only a turning flipper or a wedge can leave the ball inside a surface, so after a substep in
+which the ball touched a turning flipper or was wedged, its deepest overlap is measured
+(:func:`deepest_overlap`); a ball deeper than the skin is pushed clear (:func:`settle`), and
+where no room is left (a pocket that turning flippers close on the ball) the substep is undone:
+the ball is put back, at rest, and the flippers that could reach it stall where they started
+it. A sound state thus stays sound, substep by substep. A
 flipper sweep that runs out of slices (an absurd speed) ends the substep the same way, so the
 work of a frame is bounded whatever the state. Sensors (rollovers, the drain) are crossed, not
 collided with: a crossing of the ball's centre is an event, and a drain crossing takes the ball
