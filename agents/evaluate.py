@@ -1,0 +1,310 @@
+"""Evaluation rollouts: whole games on fixed seeds that training never used.
+
+    python -m agents.evaluate --model RUN_OR_ZIP --episodes 100 [--video game.mp4] [--curve]
+    python -m agents.evaluate --policy heuristic --episodes 100
+
+Each game is played to its end (the last ball drained, or the two-minute time limit), on seeds
+``seed .. seed + episodes - 1`` (``--seed``, by default the config's ``eval_seed``, 100000). A
+model plays through the env chain it was trained on (frame skip, frame stacking, frozen
+``VecNormalize`` statistics), choosing its actions deterministically; ``random`` (uniform over
+the actions, every frame) and ``heuristic`` (``pinball_env.heuristic.HeuristicPolicy``) play
+frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/POLICY``):
+
+- ``episodes.csv``: per game the seed, score, return (the env's reward, shaping included),
+  length (frames), balls lost and whether the time limit truncated it;
+- ``summary.json``: mean, std and 95% confidence interval of the score (normal approximation),
+  mean return and length, share truncated;
+- with ``--video PATH``: the first game as an MP4 or GIF (by the suffix), score on screen;
+- with ``--curve`` (a run): ``learning_curve.png``, the training games' mean score against
+  frames, with the random and heuristic baselines drawn in.
+
+``report(run)`` (``python -m agents.train ... --report``) does all of it for a run and its two
+baselines and writes ``report.json``. Models are pickles: load only models you trust.
+"""
+
+import argparse
+import csv
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.common import CONFIG_FILE, MODEL_FILE, make_env, stats_for
+from agents.config import ConfigError, TrainConfig, algorithm_class, config_from_dict, load_config
+from pinball_env.heuristic import HeuristicPolicy
+
+BASELINES = ("random", "heuristic")
+# The baselines play frame by frame, on the model's table with the default rewards.
+BASELINE_KWARGS = ("table", "balls")
+
+Policy = Callable[[np.ndarray, list[dict[str, Any]]], np.ndarray]
+
+
+def baseline_config(name: str, config: TrainConfig | None = None) -> TrainConfig:
+    """The config a baseline plays with: the table and balls of ``config``, one frame a step."""
+    kwargs = {} if config is None else config.env.kwargs
+    env = {"kwargs": {key: kwargs[key] for key in BASELINE_KWARGS if key in kwargs}}
+    seed = {} if config is None else {"eval_seed": config.eval_seed}
+    return config_from_dict({"env": env, **seed}, f"<{name} baseline>")
+
+
+def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
+    """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
+    n = venv.num_envs
+    if name == "random":
+        rng = np.random.default_rng(seed)
+        space = venv.action_space
+        return lambda obs, infos: rng.integers(0, space.n, size=n)
+    table = venv.get_attr("table")[0]
+    players = [HeuristicPolicy(table) for _ in range(n)]
+    return lambda obs, infos: np.array(
+        [player(info) for player, info in zip(players, infos, strict=True)]
+    )
+
+
+def model_policy(model: Any) -> Policy:
+    return lambda obs, infos: model.predict(obs, deterministic=True)[0]
+
+
+def rollouts(venv: Any, policy: Policy, frame_skip: int, seeds: list[int]) -> list[dict]:
+    """One whole game per env of ``venv`` (whose env i was seeded with ``seeds[i]``), played by
+    ``policy``; a row of metrics per game."""
+    n = venv.num_envs
+    obs = venv.reset()
+    infos = list(venv.reset_infos)
+    rows: list[dict | None] = [None] * n
+    returns = np.zeros(n)
+    steps = np.zeros(n, dtype=np.int64)
+    balls = venv.get_attr("game")[0].balls_per_game
+    while any(row is None for row in rows):
+        obs, rewards, dones, infos = venv.step(policy(obs, infos))
+        playing = np.array([row is None for row in rows])
+        returns[playing] += rewards[playing]  # raw: an evaluation VecNormalize leaves them
+        steps[playing] += 1
+        for env in np.flatnonzero(dones & playing):
+            info = infos[env]
+            rows[env] = {
+                "seed": seeds[env],
+                "score": int(info["score"]),
+                "return": round(float(returns[env]), 6),
+                "length": int(steps[env] * frame_skip),
+                "balls_lost": int(balls - info["balls_left"]),
+                "truncated": bool(info.get("TimeLimit.truncated", False)),
+            }
+    return rows  # type: ignore[return-value]
+
+
+def summarize(rows: list[dict]) -> dict[str, Any]:
+    """Mean, std and 95% confidence interval (normal approximation) of the score, and means."""
+    scores = np.array([row["score"] for row in rows], dtype=np.float64)
+    n = len(scores)
+    std = float(scores.std(ddof=1)) if n > 1 else 0.0
+    half = 1.96 * std / math.sqrt(n) if n > 1 else 0.0
+    mean = float(scores.mean())
+    return {
+        "episodes": n,
+        "score_mean": mean,
+        "score_std": std,
+        "score_ci95": [mean - half, mean + half],
+        "return_mean": float(np.mean([row["return"] for row in rows])),
+        "length_mean": float(np.mean([row["length"] for row in rows])),
+        "truncated_share": float(np.mean([row["truncated"] for row in rows])),
+    }
+
+
+def load_model(path: Path) -> tuple[Any, TrainConfig, Path]:
+    """A model, its config and its file, from a run folder or a model zip (the config is the
+    run's, beside the zip or one folder up). Trusted input only: SB3 zips hold pickles."""
+    if path.is_dir():
+        run, model_path = path, path / MODEL_FILE
+    else:
+        model_path = path
+        run = next((p for p in (path.parent, path.parent.parent) if (p / CONFIG_FILE).is_file()),
+                   path.parent)  # fmt: skip
+    if not model_path.is_file():
+        raise ConfigError(f"{path}: no model there ({model_path.name} not found)")
+    if not (run / CONFIG_FILE).is_file():
+        raise ConfigError(f"{path}: no {CONFIG_FILE} beside the model: cannot rebuild its env")
+    config = load_config(run / CONFIG_FILE)
+    model = algorithm_class(config.algo).load(model_path, device=config.device)
+    return model, config, model_path
+
+
+def evaluate(
+    policy: str | None = None,
+    model_path: Path | None = None,
+    table: str | None = None,
+    episodes: int = 100,
+    seed: int | None = None,
+    out: Path | None = None,
+    video: Path | None = None,
+    curve: bool = False,
+) -> dict[str, Any]:
+    """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
+    returns the summary."""
+    if (policy is None) == (model_path is None):
+        raise ConfigError("give a model or a policy (random or heuristic), not both")
+    if episodes < 1:
+        raise ConfigError(f"episodes must be >= 1, got {episodes}")
+    if policy is not None:
+        if policy not in BASELINES:
+            raise ConfigError(f"unknown policy {policy!r} (known: {', '.join(BASELINES)})")
+        env = {"table": table} if table else {}
+        config = baseline_config(policy, config_from_dict({"env": {"kwargs": env}}))
+        stats, name = None, policy
+        out = out or Path("evals") / policy
+    else:
+        import torch
+
+        model, config, path = load_model(model_path)
+        torch.set_num_threads(config.torch_threads)
+        stats, name = stats_for(path), str(model_path)
+        out = out or (model_path if model_path.is_dir() else path.parent) / "eval"
+    first = config.eval_seed if seed is None else seed
+    if model_path is not None and first < config.seed + config.env.num_envs <= first + episodes:
+        raise ConfigError(
+            f"seeds {first}..{first + episodes - 1} overlap the training seeds "
+            f"{config.seed}..{config.seed + config.env.num_envs - 1}"
+        )
+    seeds = list(range(first, first + episodes))
+    venv = make_env(config, num_envs=episodes, seed=first, stats=stats)
+    act = baseline_policy(policy, venv, first) if policy else model_policy(model)
+    rows = rollouts(venv, act, config.env.frame_skip, seeds)
+    venv.close()
+    summary = {"policy": name, "seeds": [first, first + episodes - 1], **summarize(rows)}
+    write_results(out, rows, summary)
+    if video is not None:
+        record_video(config, stats, policy, model if policy is None else None, first, video)
+    if curve and model_path is not None and model_path.is_dir():
+        plot_learning_curve(model_path, out / "learning_curve.png", baselines_for(model_path))
+    print(
+        f"{name}: score {summary['score_mean']:.0f} (95% CI {summary['score_ci95'][0]:.0f}-"
+        f"{summary['score_ci95'][1]:.0f}) over {episodes} games, mean length "
+        f"{summary['length_mean']:.0f} frames, {summary['truncated_share']:.0%} truncated "
+        f"-> {out}"
+    )
+    return summary
+
+
+def write_results(out: Path, rows: list[dict], summary: dict[str, Any]) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "episodes.csv", "w", newline="") as file:
+        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+
+
+def record_video(
+    config: TrainConfig, stats: Path | None, policy: str | None, model: Any, seed: int, path: Path
+) -> None:
+    """The game on ``seed`` as a video (MP4, or GIF by the suffix), the scoreboard in view."""
+    import imageio.v2 as imageio
+
+    venv = make_env(config, num_envs=1, seed=seed, stats=stats, render=True)
+    act = baseline_policy(policy, venv, seed) if policy else model_policy(model)
+    obs = venv.reset()
+    infos = list(venv.reset_infos)
+    frames = [venv.get_images()[0]]
+    while True:
+        obs, _, dones, infos = venv.step(act(obs, infos))
+        if dones[0]:
+            break
+        frames.append(venv.get_images()[0])
+    fps = venv.get_attr("metadata")[0]["render_fps"]  # frames per step shown
+    venv.close()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() == ".gif":
+        stride = max(1, round(fps / 20))  # about 20 frames a second keeps a GIF small
+        imageio.mimsave(path, frames[::stride], duration=1000 * stride / fps, loop=0)
+    else:
+        imageio.mimsave(path, frames, fps=fps, macro_block_size=1)
+    print(f"video: {path} ({len(frames)} frames)")
+
+
+def baselines_for(run: Path) -> dict[str, float]:
+    """The baselines' mean scores from a run's report, when it has one."""
+    report = run / "report.json"
+    if not report.is_file():
+        return {}
+    data = json.loads(report.read_text())
+    return {name: data[name]["score_mean"] for name in BASELINES if name in data}
+
+
+def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> None:
+    """The training games' mean score (``rollout/ep_score_mean``) against frames played."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    config = load_config(run / CONFIG_FILE)
+    with open(run / "progress.csv") as file:
+        rows = [row for row in csv.DictReader(file) if row.get("rollout/ep_score_mean")]
+    if not rows:
+        print(f"no learning curve: {run} has no finished training games logged yet")
+        return
+    frames = [float(row["time/total_timesteps"]) * config.env.frame_skip for row in rows]
+    scores = [float(row["rollout/ep_score_mean"]) for row in rows]
+    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
+    ax.plot(frames, scores, label=f"{config.algo.upper()} (training games, last 100)")
+    for (name, score), style in zip(baselines.items(), ("--", ":"), strict=False):
+        ax.axhline(score, linestyle=style, color="grey", label=f"{name} (evaluation)")
+    ax.set_xlabel("frames played (1/60 s each)")
+    ax.set_ylabel("game score")
+    ax.set_title(f"{config.env.id} on {config.env.kwargs.get('table', 'classic')}")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out)
+    plt.close(fig)
+
+
+def report(run: Path, episodes: int = 100) -> dict[str, Any]:
+    """Evaluate a run's model and both baselines on the same seeds; write ``report.json``,
+    ``learning_curve.png`` and ``game.gif`` into the run folder."""
+    config = load_config(run / CONFIG_FILE)
+    results = {}
+    for name in BASELINES:
+        out = run / "eval" / name
+        results[name] = evaluate(
+            policy=name, table=config.env.kwargs.get("table"), episodes=episodes,
+            seed=config.eval_seed, out=out,
+        )  # fmt: skip
+    results["model"] = evaluate(
+        model_path=run, episodes=episodes, out=run / "eval" / "model", video=run / "game.gif"
+    )
+    (run / "report.json").write_text(json.dumps(results, indent=1))
+    plot_learning_curve(run, run / "learning_curve.png", baselines_for(run))
+    print(f"report: {run / 'report.json'}, {run / 'learning_curve.png'}, {run / 'game.gif'}")
+    return results
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    who = parser.add_mutually_exclusive_group(required=True)
+    who.add_argument("--model", type=Path, help="a run folder or a model zip")
+    who.add_argument("--policy", choices=BASELINES, help="a baseline")
+    parser.add_argument("--table", help="the baselines' table (default: classic)")
+    parser.add_argument("--episodes", type=int, default=100, help="games to play")
+    parser.add_argument("--seed", type=int, help="first game's seed (default: eval_seed)")
+    parser.add_argument("--out", type=Path, help="where to write the results")
+    parser.add_argument("--video", type=Path, help="record the first game (.mp4 or .gif)")
+    parser.add_argument("--curve", action="store_true", help="draw a run's learning curve")
+    args = parser.parse_args(argv)
+    try:
+        return evaluate(
+            policy=args.policy, model_path=args.model, table=args.table, episodes=args.episodes,
+            seed=args.seed,
+            out=args.out, video=args.video, curve=args.curve,
+        )  # fmt: skip
+    except ConfigError as error:
+        parser.exit(2, f"error: {error}\n")
+
+
+if __name__ == "__main__":
+    main()

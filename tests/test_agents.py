@@ -1,0 +1,207 @@
+"""Training and evaluation from configs: smoke runs of every shipped config, resume, atomic
+checkpoints, config errors, deterministic evaluation, and rl-zoo3's hyperparameters."""
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from agents import evaluate, train
+from agents.common import atomic_write, latest_checkpoint, save_model
+from agents.config import ConfigError, load_config
+
+ROOT = Path(__file__).resolve().parent.parent
+CONFIGS = sorted((ROOT / "configs" / "agents").glob("*.yaml"))
+# Tiny budgets: a few hundred steps, a couple of envs.
+TINY = {
+    "ppo": ["hyperparams.n_steps=64", "hyperparams.batch_size=64"],
+    "a2c": ["hyperparams.n_steps=8"],
+    "dqn": ["hyperparams.learning_starts=64", "hyperparams.buffer_size=1000"],
+}
+
+
+def tiny_overrides(config: Path) -> list[str]:
+    algo = yaml.safe_load(config.read_text())["algo"]
+    return ["total_timesteps=256", "env.num_envs=2", "checkpoint_every=128", *TINY[algo]]
+
+
+def tiny_run(config: Path, runs: Path, *extra: str) -> Path:
+    overrides = [*tiny_overrides(config), *extra]
+    train.main(["--config", str(config), *overrides, "--runs", str(runs), "--no-progress"])
+    (run,) = runs.iterdir()
+    return run
+
+
+@pytest.mark.parametrize("config", CONFIGS, ids=lambda path: path.stem)
+def test_every_shipped_config_trains_and_evaluates(config, tmp_path):
+    run = tiny_run(config, tmp_path / "runs")
+    assert load_config(run / "config.yaml") == load_config(config, tiny_overrides(config))
+    meta = json.loads((run / "meta.json").read_text())
+    assert meta["pinball_env"] and meta["stable_baselines3"] and meta["torch"]
+    assert (run / "model.zip").is_file()
+    assert list(run.glob("events.out.tfevents.*")), "TensorBoard logs"
+    assert latest_checkpoint(run)[0] >= 256
+    summary = evaluate.main(["--model", str(run), "--episodes", "2"])
+    assert summary["episodes"] == 2 and summary["seeds"] == [100_000, 100_001]
+    with open(run / "eval" / "episodes.csv") as file:
+        rows = list(csv.DictReader(file))
+    assert [row["balls_lost"] for row in rows] == ["3", "3"]  # whole games
+
+
+def test_a_run_killed_after_a_checkpoint_resumes_from_it(tmp_path):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")
+    # As if killed after the first checkpoint: the later ones and the model never written.
+    (run / "model.zip").unlink()
+    for path in (run / "checkpoints").glob("*"):
+        if not path.name.startswith("step_128"):
+            path.unlink()
+    assert latest_checkpoint(run)[0] == 128
+    train.main(["--resume", str(run), "--no-progress"])
+    from stable_baselines3 import PPO
+
+    assert PPO.load(run / "model.zip").num_timesteps == 256
+    assert latest_checkpoint(run)[0] == 256
+
+
+def test_a_checkpoint_write_killed_midway_leaves_the_last_one_whole(tmp_path):
+    folder = tmp_path / "checkpoints"
+    atomic_write(folder / "step_100.zip", lambda file: file.write(b"complete"))
+
+    def killed(file):
+        file.write(b"half a checkp")
+        raise KeyboardInterrupt  # the run dies in the middle of the write
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(folder / "step_200.zip", killed)
+    assert [path.name for path in folder.iterdir()] == ["step_100.zip"]
+    assert (folder / "step_100.zip").read_bytes() == b"complete"
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(folder / "step_100.zip", killed)  # nor is an old one overwritten by half
+    assert (folder / "step_100.zip").read_bytes() == b"complete"
+
+
+def test_save_model_writes_the_normalisation_statistics_first(tmp_path, monkeypatch):
+    order = []
+    monkeypatch.setattr("agents.common.atomic_write", lambda path, write: order.append(path.name))
+
+    class Model:
+        def get_env(self):
+            return type("VecNormalize", (), {"obs_rms": None})()
+
+        def save(self, file):
+            pass
+
+    save_model(Model(), tmp_path, "step_5")
+    assert order == ["step_5_vecnormalize.pkl", "step_5.zip"]
+
+
+def test_evaluation_is_deterministic_for_a_model_and_seeds(tmp_path):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")
+    for out in ("a", "b"):
+        evaluate.main(["--model", str(run), "--episodes", "3", "--out", str(tmp_path / out)])
+    assert (tmp_path / "a/episodes.csv").read_text() == (tmp_path / "b/episodes.csv").read_text()
+
+
+def test_baselines_evaluate_with_video(tmp_path):
+    summary = evaluate.main(
+        ["--policy", "heuristic", "--episodes", "2", "--out", str(tmp_path / "h"),
+         "--video", str(tmp_path / "game.gif")]
+    )  # fmt: skip
+    assert summary["policy"] == "heuristic" and summary["episodes"] == 2
+    assert (tmp_path / "game.gif").read_bytes()[:6] == b"GIF89a"
+    random = evaluate.main(["--policy", "random", "--episodes", "2", "--out", str(tmp_path / "r")])
+    assert json.loads((tmp_path / "r/summary.json").read_text()) == random
+
+
+def test_report_writes_the_comparison_curve_and_game(tmp_path):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", "env.num_envs=8",
+                   "total_timesteps=8192", "hyperparams.n_steps=512")  # fmt: skip
+    report = evaluate.report(run, episodes=2)
+    assert set(report) == {"random", "heuristic", "model"}
+    assert json.loads((run / "report.json").read_text()) == report
+    assert (run / "learning_curve.png").read_bytes()[:4] == b"\x89PNG"
+    assert (run / "game.gif").is_file()
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (["algo=sac"], "algo: unknown algorithm 'sac'"),
+        (["policy=LstmPolicy"], "policy: unknown policy 'LstmPolicy'"),
+        (["policy=CnnPolicy"], "CnnPolicy does not fit obs_type 'state'"),
+        (["totl_timesteps=5"], "unknown key 'totl_timesteps'"),
+        (["env.kwargs.tabel=classic"], "env.kwargs.tabel: not a training option"),
+        (["env.kwargs.table=nowhere"], "env.kwargs: unknown table 'nowhere'"),
+        (["env.kwargs.render_mode=human"], "env.kwargs.render_mode: not a training option"),
+        (["env.kwargs.frame_skip=0"], "frame_skip must be an integer from 1 to 60"),
+        (["hyperparams.n_step=3"], "hyperparams.n_step: not an option of PPO"),
+        (["total_timesteps=-1"], "total_timesteps: must be an integer >= 1"),
+        (["eval_seed=3"], "eval_seed: 3 overlaps the training seeds"),
+        (["env.id=CartPole-v9"], "env.id: 'CartPole-v9' is not a registered environment"),
+        (["seed"], "override 'seed' is not key=value"),
+    ],
+)
+def test_bad_configs_are_rejected_naming_the_key(overrides, message):
+    with pytest.raises(ConfigError, match=message):
+        load_config(ROOT / "configs/agents/ppo.yaml", overrides)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [("algo: [", "not valid YAML"), ("- ppo", "a config is a mapping"), (None, "cannot read")],
+)
+def test_bad_config_files_are_rejected(tmp_path, text, message):
+    path = tmp_path / "config.yaml"
+    if text is not None:
+        path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config(path)
+
+
+def test_the_command_line_fails_clearly_before_training(tmp_path, capsys):
+    runs = tmp_path / "runs"
+    for argv in (
+        ["--resume", str(tmp_path / "nothing")],
+        ["--config", str(ROOT / "configs/agents/ppo.yaml"), "hyperparams.n_steps=abc"],
+        [],
+    ):
+        with pytest.raises(SystemExit) as exit_:
+            train.main([*argv, "--runs", str(runs)])
+        assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert "not a run folder" in err and "PPO rejects them" in err and "give --config" in err
+    assert not runs.exists() or not any(runs.iterdir())  # no run folder left behind
+    with pytest.raises(SystemExit):
+        evaluate.main(["--model", str(tmp_path / "nothing")])
+    assert "no model there" in capsys.readouterr().err
+
+
+def test_rl_zoo3_hyperparameters_are_the_ppo_config():
+    zoo = yaml.safe_load((ROOT / "configs/agents/rl_zoo3.yml").read_text())["Pinball-v0"]
+    config = load_config(ROOT / "configs/agents/ppo.yaml")
+    hyperparams = dict(config.hyperparams)
+    assert zoo.pop("policy_kwargs") == "dict(net_arch={})".format(
+        hyperparams.pop("policy_kwargs")["net_arch"]
+    )
+    assert zoo.pop("env_kwargs") == config.env.make_kwargs
+    assert zoo.pop("policy") == config.policy
+    assert zoo.pop("n_timesteps") == config.total_timesteps
+    assert zoo.pop("n_envs") == config.env.num_envs
+    assert zoo.pop("normalize") == config.env.normalize
+    assert zoo == hyperparams
+
+
+def test_rl_zoo3_trains_with_the_shipped_hyperparameters(tmp_path):
+    command = [
+        sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", "Pinball-v0",
+        "--gym-packages", "pinball_env", "--conf-file", "configs/agents/rl_zoo3.yml",
+        "-n", "256", "--log-folder", str(tmp_path), "--eval-freq", "-1", "--seed", "0",
+    ]  # fmt: skip
+    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "Normalization activated" in done.stdout and "frame_skip': 2" in done.stdout
+    assert list(tmp_path.glob("ppo/Pinball-v0_*/Pinball-v0.zip"))
