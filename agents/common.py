@@ -9,9 +9,11 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
 from agents.config import TrainConfig
+from pinball_env.heuristic import HeuristicPolicy
 from pinball_env.wrappers import SB3VecEnv
 
 CONFIG_FILE = "config.yaml"
@@ -19,6 +21,10 @@ MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.pkl"
 CHECKPOINTS = "checkpoints"
 CHECKPOINT_NAME = re.compile(r"step_(\d+)\.zip$")
+BASELINES = ("random", "heuristic")
+
+# A policy over a VecEnv: (observations, infos) -> actions.
+Policy = Callable[[np.ndarray, list[dict[str, Any]]], np.ndarray]
 
 
 def make_env(
@@ -60,6 +66,20 @@ def make_env(
                 venv, norm_obs=not image, gamma=config.hyperparams.get("gamma", 0.99)
             )
     return venv
+
+
+def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
+    """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
+    n = venv.num_envs
+    if name == "random":
+        rng = np.random.default_rng(seed)
+        space = venv.action_space
+        return lambda obs, infos: rng.integers(0, space.n, size=n)
+    table = venv.get_attr("table")[0]
+    players = [HeuristicPolicy(table) for _ in range(n)]
+    return lambda obs, infos: np.array(
+        [player(info) for player, info in zip(players, infos, strict=True)]
+    )
 
 
 def run_name(config: TrainConfig, when: str) -> str:

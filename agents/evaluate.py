@@ -26,21 +26,24 @@ import argparse
 import csv
 import json
 import math
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from agents.common import CONFIG_FILE, MODEL_FILE, make_env, stats_for
+from agents.common import (
+    BASELINES,
+    CONFIG_FILE,
+    MODEL_FILE,
+    Policy,
+    baseline_policy,
+    make_env,
+    stats_for,
+)
 from agents.config import ConfigError, TrainConfig, algorithm_class, config_from_dict, load_config
-from pinball_env.heuristic import HeuristicPolicy
 
-BASELINES = ("random", "heuristic")
 # The baselines play frame by frame, on the model's table with the default rewards.
 BASELINE_KWARGS = ("table", "balls")
-
-Policy = Callable[[np.ndarray, list[dict[str, Any]]], np.ndarray]
 
 
 def baseline_config(name: str, config: TrainConfig | None = None) -> TrainConfig:
@@ -49,20 +52,6 @@ def baseline_config(name: str, config: TrainConfig | None = None) -> TrainConfig
     env = {"kwargs": {key: kwargs[key] for key in BASELINE_KWARGS if key in kwargs}}
     seed = {} if config is None else {"eval_seed": config.eval_seed}
     return config_from_dict({"env": env, **seed}, f"<{name} baseline>")
-
-
-def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
-    """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
-    n = venv.num_envs
-    if name == "random":
-        rng = np.random.default_rng(seed)
-        space = venv.action_space
-        return lambda obs, infos: rng.integers(0, space.n, size=n)
-    table = venv.get_attr("table")[0]
-    players = [HeuristicPolicy(table) for _ in range(n)]
-    return lambda obs, infos: np.array(
-        [player(info) for player, info in zip(players, infos, strict=True)]
-    )
 
 
 def model_policy(model: Any) -> Policy:
@@ -74,7 +63,7 @@ def rollouts(venv: Any, policy: Policy, frame_skip: int, seeds: list[int]) -> li
     ``policy``; a row of metrics per game."""
     n = venv.num_envs
     obs = venv.reset()
-    infos = list(venv.reset_infos)
+    infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
     rows: list[dict | None] = [None] * n
     returns = np.zeros(n)
     steps = np.zeros(n, dtype=np.int64)
@@ -207,7 +196,7 @@ def record_video(
     venv = make_env(config, num_envs=1, seed=seed, stats=stats, render=True)
     act = baseline_policy(policy, venv, seed) if policy else model_policy(model)
     obs = venv.reset()
-    infos = list(venv.reset_infos)
+    infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
     frames = [venv.get_images()[0]]
     while True:
         obs, _, dones, infos = venv.step(act(obs, infos))

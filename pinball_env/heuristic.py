@@ -15,7 +15,7 @@ from pinball_env.game import discrete_action
 from pinball_env.table import BUTTONS, Flipper, Table
 
 
-class _Face:
+class FlipperFace:
     """A flipper's upper face at one angle, for a ball of radius ``radius``.
 
     ``u`` runs from the pivot towards the tip, ``w`` away from the face on the side the flipper
@@ -54,6 +54,15 @@ class _Face:
     def over(self, u: float) -> bool:
         """Whether a ball at ``u`` is over the face (from the base circle to the tip)."""
         return -self.base < u <= self.end
+
+    def time_to_touch(self, gap: float, vw: float) -> float:
+        """When [s] a ball ``gap`` from the face, moving at ``vw`` towards it (negative), first
+        touches it under the table's gravity (inf for never): the first root t of
+        gap + vw t + gw t^2 / 2 = 0, written so that it holds for gw = 0 too."""
+        root = vw * vw - 2.0 * self.gw * gap
+        if root < 0.0 or math.sqrt(root) <= vw:
+            return math.inf
+        return 2.0 * gap / (math.sqrt(root) - vw)
 
 
 class HeuristicPolicy:
@@ -97,8 +106,8 @@ class HeuristicPolicy:
         self.settle_speed = settle_speed
         radius = table.ball.radius
         gravity = table.gravity_vector
-        self._rest = [_Face(f, f.rest_angle, radius, gravity) for f in table.flippers]
-        self._up = [_Face(f, f.up_angle, radius, gravity) for f in table.flippers]
+        self._rest = [FlipperFace(f, f.rest_angle, radius, gravity) for f in table.flippers]
+        self._up = [FlipperFace(f, f.up_angle, radius, gravity) for f in table.flippers]
         self._buttons = [f.button_index for f in table.flippers]
         # A ball within this of a face is touching it (rolling on it, or cradled).
         self._touch = 0.25 * radius
@@ -115,21 +124,17 @@ class HeuristicPolicy:
         face = self._rest[j]
         u, w = face.local(x, y)
         vu, vw = face.turn(vx, vy)
-        gu, gw = face.gu, face.gw
+        gu = face.gu
         if not face.over(u) or w < 0.0:
             return False
         gap = face.gap(u, w)
         if gap <= self._touch and abs(vw) < 0.1:
             # Rolling down the face: shoot from the aim point, or before it runs off the tip.
             return u >= self.aim * face.length or u + vu * self.lead >= face.end - face.base
-        # Falling onto it: flip if it is already close, or lands within the lead time, the
-        # first root t of gap + vw t + gw t^2 / 2 = 0 (written so that it holds for gw = 0 too).
+        # Falling onto it: flip if it is already close, or lands within the lead time.
         if vw < 0.0 and gap <= self.reach:
             return True
-        root = vw * vw - 2.0 * gw * gap
-        if root < 0.0 or math.sqrt(root) <= vw:
-            return False
-        t = 2.0 * gap / (math.sqrt(root) - vw)
+        t = face.time_to_touch(gap, vw)
         return t <= self.lead and face.over(u + vu * t + 0.5 * gu * t * t)
 
     def _keep(self, j: int, x: float, y: float, vx: float, vy: float) -> bool:
