@@ -47,10 +47,12 @@ def test_seeding_attributes_and_images():
 @pytest.mark.parametrize("algorithm", ["PPO", "DQN"])
 def test_sb3_trains_on_the_native_vector_env(algorithm):
     import stable_baselines3
+    from stable_baselines3.common.logger import Logger
 
     env = SB3VecEnv(gym.make_vec("Pinball-v0", num_envs=16 if algorithm == "PPO" else 4))
     kwargs = {"n_steps": 16, "batch_size": 64} if algorithm == "PPO" else {"learning_starts": 64}
     model = getattr(stable_baselines3, algorithm)("MlpPolicy", env, seed=0, device="cpu", **kwargs)
+    model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default makes a temp dir
     model.learn(total_timesteps=512)
     assert model.num_timesteps >= 512
     action, _ = model.predict(env.reset(), deterministic=True)
