@@ -70,6 +70,9 @@ class TrainConfig:
     """``MlpPolicy`` for state observations, ``CnnPolicy`` for images."""
     total_timesteps: int = 1_000_000
     """Env steps to train for, summed over the envs (frames = steps x frame_skip)."""
+    max_minutes: float = 0.0
+    """Wall-clock limit of a training session [min] (0: none): learning stops at the first
+    rollout past it, however few of ``total_timesteps`` are done."""
     seed: int = 0
     """Seed of the algorithm and of the training games (env i starts from seed + i)."""
     device: str = "cpu"
@@ -167,6 +170,9 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
         fail("policy", f"unknown policy {config.policy!r} (known: {', '.join(POLICIES)})")
     integer("total_timesteps", config.total_timesteps, 1)
     integer("seed", config.seed, 0)
+    minutes = config.max_minutes
+    if isinstance(minutes, bool) or not isinstance(minutes, (int, float)) or not 0 <= minutes < 1e6:
+        fail("max_minutes", f"must be a number of minutes >= 0, got {minutes!r}")
     integer("torch_threads", config.torch_threads, 1)
     integer("env_threads", config.env_threads, 1)
     integer("checkpoint_every", config.checkpoint_every, 0)

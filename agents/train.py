@@ -40,8 +40,9 @@ from agents.config import ConfigError, TrainConfig, algorithm_class, load_config
 
 
 def make_callback(config: TrainConfig, run: Path) -> Any:
-    """Checkpoints every ``checkpoint_every`` env steps, and the mean game score of the last
-    100 training games logged as ``rollout/ep_score_mean`` (the score, not the shaped return)."""
+    """Checkpoints every ``checkpoint_every`` env steps, the mean game score of the last 100
+    training games logged as ``rollout/ep_score_mean`` (the score, not the shaped return), and
+    the stop at ``max_minutes``."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class TrainingCallback(BaseCallback):
@@ -54,6 +55,7 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
         def _on_training_start(self) -> None:
             every = config.checkpoint_every
             self.next_checkpoint = (self.num_timesteps // every + 1) * every if every else 0
+            self.deadline = time.monotonic() + 60.0 * config.max_minutes
 
         def _on_step(self) -> bool:
             for done, info in zip(self.locals["dones"], self.locals["infos"], strict=True):
@@ -63,7 +65,7 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
             if self.next_checkpoint and self.num_timesteps >= self.next_checkpoint:
                 save_model(self.model, run / CHECKPOINTS, f"step_{self.num_timesteps}")
                 self.next_checkpoint += config.checkpoint_every
-            return True
+            return not config.max_minutes or time.monotonic() < self.deadline
 
         def _on_rollout_end(self) -> None:
             if self.scores:

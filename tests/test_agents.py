@@ -143,6 +143,7 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["eval_seed=3"], "eval_seed: 3 overlaps the training seeds"),
         (["env.id=CartPole-v9"], "env.id: 'CartPole-v9' is not a registered environment"),
         (["seed"], "override 'seed' is not key=value"),
+        (["max_minutes=-1"], "max_minutes: must be a number of minutes >= 0"),
     ],
 )
 def test_bad_configs_are_rejected_naming_the_key(overrides, message):
@@ -205,3 +206,12 @@ def test_rl_zoo3_trains_with_the_shipped_hyperparameters(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     assert "Normalization activated" in done.stdout and "frame_skip': 2" in done.stdout
     assert list(tmp_path.glob("ppo/Pinball-v0_*/Pinball-v0.zip"))
+
+
+def test_training_stops_at_its_wall_clock_limit(tmp_path):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", "total_timesteps=10000000",
+                   "max_minutes=0.0001")  # fmt: skip
+    from stable_baselines3 import PPO
+
+    steps = PPO.load(run / "model.zip").num_timesteps
+    assert 0 < steps < 10_000_000  # stopped in the first rollout past the limit, and saved
