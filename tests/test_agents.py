@@ -113,8 +113,12 @@ def test_baselines_evaluate_with_video(tmp_path):
     )  # fmt: skip
     assert summary["policy"] == "heuristic" and summary["episodes"] == 2
     assert (tmp_path / "game.gif").read_bytes()[:6] == b"GIF89a"
-    random = evaluate.main(["--policy", "random", "--episodes", "2", "--out", str(tmp_path / "r")])
+    random = evaluate.main(
+        ["--policy", "random", "--episodes", "2", "--out", str(tmp_path / "r"),
+         "--video", str(tmp_path / "game.mp4")]
+    )  # fmt: skip
     assert json.loads((tmp_path / "r/summary.json").read_text()) == random
+    assert (tmp_path / "game.mp4").read_bytes()[4:8] == b"ftyp"  # an MP4 container
 
 
 def test_report_writes_the_comparison_curve_and_game(tmp_path):
