@@ -7,10 +7,10 @@ A run folder (``runs/`` by default, named from env, algorithm, seed and start ti
 exact config (``config.yaml``), ``meta.json`` (package versions, command), TensorBoard logs
 (``events.out.tfevents.*``), ``progress.csv``, checkpoints written atomically every
 ``checkpoint_every`` env steps (``checkpoints/step_N.zip``), and the final ``model.zip`` (with
-``model_vecnormalize.pkl`` when the config normalises). ``--resume RUN`` continues a run from its last checkpoint with the same
-config. Training stops at ``total_timesteps`` or after ``max_minutes`` of wall time. ``--report``
-then evaluates the model against the random and heuristic baselines and writes the report into
-the run folder (see ``agents.evaluate``).
+``model_vecnormalize.pkl`` when the config normalises). ``--resume RUN`` continues a run from
+its last checkpoint with the same config. Training stops at ``total_timesteps`` or after
+``max_minutes`` of wall time. ``--report`` then evaluates the model against the random and
+heuristic baselines and writes the report into the run folder (see ``agents.evaluate``).
 
 Models are pickles inside zips: load only models you trust.
 """
