@@ -16,7 +16,8 @@ frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/P
   mean return and length, share truncated;
 - with ``--video PATH``: the first game as an MP4 or GIF (by the suffix), score on screen;
 - with ``--curve`` (a run): ``learning_curve.png``, the training games' mean score against
-  frames, with the random and heuristic baselines drawn in.
+  frames, with the random and heuristic baselines drawn in (from the run's report, or played
+  on the same games, their results in ``OUT/random`` and ``OUT/heuristic``).
 
 ``report(run)`` (``python -m agents.train ... --report``) does all of it for a run and its two
 baselines and writes ``report.json``. Models are pickles: load only models you trust.
@@ -168,7 +169,14 @@ def evaluate(
     if video is not None:
         record_video(config, stats, policy, model if policy is None else None, first, video)
     if curve and model_path is not None and model_path.is_dir():
-        plot_learning_curve(model_path, out / "learning_curve.png", baselines_for(model_path))
+        baselines = baselines_for(model_path) or {  # played now on the same games
+            baseline: evaluate(
+                policy=baseline, table=config.env.kwargs.get("table"), episodes=episodes,
+                seed=first, out=out / baseline,
+            )["score_mean"]
+            for baseline in BASELINES
+        }  # fmt: skip
+        plot_learning_curve(model_path, out / "learning_curve.png", baselines)
     print(
         f"{name}: score {summary['score_mean']:.0f} (95% CI {summary['score_ci95'][0]:.0f}-"
         f"{summary['score_ci95'][1]:.0f}) over {episodes} games, mean length "

@@ -219,3 +219,14 @@ def test_training_stops_at_its_wall_clock_limit(tmp_path):
 
     steps = PPO.load(run / "model.zip").num_timesteps
     assert 0 < steps < 10_000_000  # stopped in the first rollout past the limit, and saved
+
+
+def test_a_checkpoint_evaluates_and_a_curve_brings_its_baselines(tmp_path):
+    longer = ["env.num_envs=8", "total_timesteps=8192", "hyperparams.n_steps=512"]
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", *longer)
+    _, checkpoint = latest_checkpoint(run)
+    summary = evaluate.main(["--model", str(checkpoint), "--episodes", "1"])  # config: run's
+    assert summary["episodes"] == 1 and (run / "checkpoints" / "eval" / "summary.json").is_file()
+    evaluate.main(["--model", str(run), "--episodes", "1", "--curve", "--out", str(tmp_path / "e")])
+    assert (tmp_path / "e/learning_curve.png").read_bytes()[:4] == b"\x89PNG"
+    assert {p.name for p in (tmp_path / "e").iterdir()} >= {"random", "heuristic"}
