@@ -98,6 +98,7 @@ def atomic_write(path: Path, write: Callable[[Any], None]) -> None:
             write(file)
             file.flush()
             os.fsync(file.fileno())
+        os.chmod(temporary, 0o644)  # mkstemp's 0600 is for secrets, not models
         os.replace(temporary, path)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)

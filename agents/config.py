@@ -28,6 +28,8 @@ POLICIES = ("MlpPolicy", "CnnPolicy")
 # training config must not set (rendering, and the thread count, which `torch_threads` sets).
 VECTOR_ONLY_KWARGS = ("max_episode_steps",)
 FORBIDDEN_ENV_KWARGS = ("render_mode", "num_threads", "autoreset_mode")
+# The agents train on the native vector env of the pinball envs registered with this entry point.
+PINBALL_ENTRY_POINT = "pinball_env.env:PinballEnv"
 
 
 class ConfigError(ValueError):
@@ -71,8 +73,9 @@ class TrainConfig:
     total_timesteps: int = 1_000_000
     """Env steps to train for, summed over the envs (frames = steps x frame_skip)."""
     max_minutes: float = 0.0
-    """Wall-clock limit of a training session [min] (0: none): learning stops at the first
-    rollout past it, however few of ``total_timesteps`` are done."""
+    """Wall-clock limit of a training session [min] (0: none): learning stops at the first env
+    step past it (the unfinished rollout is not learned from), however few of
+    ``total_timesteps`` are done, and the model is saved."""
     seed: int = 0
     """Seed of the algorithm and of the training games (env i starts from seed + i)."""
     device: str = "cpu"
@@ -181,8 +184,12 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
     integer("env.frame_stack", config.env.frame_stack, 1)
     if not isinstance(config.env.normalize, bool):
         fail("env.normalize", f"must be true or false, got {config.env.normalize!r}")
-    if not isinstance(config.device, str):
-        fail("device", f"must be a string such as 'cpu', got {config.device!r}")
+    try:
+        import torch
+
+        torch.device(config.device)
+    except (RuntimeError, TypeError):
+        fail("device", f"not a torch device: {config.device!r}")
     if not isinstance(config.notes, str):
         fail("notes", "must be text")
     if config.eval_seed < config.seed + config.env.num_envs:
@@ -201,9 +208,11 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
         if isinstance(value, float) and not math.isfinite(value):
             fail(f"hyperparams.{key}", f"must be finite, got {value!r}")
     try:
-        gym.spec(config.env.id)
+        spec = gym.spec(config.env.id) if isinstance(config.env.id, str) else None
     except gym.error.Error:
-        fail("env.id", f"{config.env.id!r} is not a registered environment")
+        spec = None
+    if spec is None or spec.entry_point != PINBALL_ENTRY_POINT:
+        fail("env.id", f"{config.env.id!r} is not a registered pinball environment")
     if not isinstance(config.env.kwargs, dict):
         fail("env.kwargs", "must be a mapping of Pinball-v0's options")
     options = set(inspect.signature(PinballEnv.__init__).parameters) - {"self"}

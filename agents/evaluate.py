@@ -154,7 +154,11 @@ def evaluate(
         stats, name = stats_for(path), str(model_path)
         out = out or (model_path if model_path.is_dir() else path.parent) / "eval"
     first = config.eval_seed if seed is None else seed
-    if model_path is not None and first < config.seed + config.env.num_envs <= first + episodes:
+    if model_path is not None and config.env.normalize and stats is None:
+        raise ConfigError(f"{model_path}: the model's VecNormalize statistics are missing")
+    if model_path is not None and (
+        first < config.seed + config.env.num_envs and config.seed < first + episodes
+    ):
         raise ConfigError(
             f"seeds {first}..{first + episodes - 1} overlap the training seeds "
             f"{config.seed}..{config.seed + config.env.num_envs - 1}"
@@ -203,23 +207,26 @@ def record_video(
 
     venv = make_env(config, num_envs=1, seed=seed, stats=stats, render=True)
     act = baseline_policy(policy, venv, seed) if policy else model_policy(model)
-    obs = venv.reset()
-    infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
-    frames = [venv.get_images()[0]]
-    while True:
-        obs, _, dones, infos = venv.step(act(obs, infos))
-        if dones[0]:
-            break
-        frames.append(venv.get_images()[0])
     fps = venv.get_attr("metadata")[0]["render_fps"]  # frames per step shown
-    venv.close()
+    stride = max(1, round(fps / 20)) if path.suffix.lower() == ".gif" else 1  # small GIFs
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
-        stride = max(1, round(fps / 20))  # about 20 frames a second keeps a GIF small
-        imageio.mimsave(path, frames[::stride], duration=1000 * stride / fps, loop=0)
+        writer = imageio.get_writer(path, duration=1000 * stride / fps, loop=0)
     else:
-        imageio.mimsave(path, frames, fps=fps, macro_block_size=1)
-    print(f"video: {path} ({len(frames)} frames)")
+        writer = imageio.get_writer(path, fps=fps, macro_block_size=1)
+    obs = venv.reset()
+    infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
+    frames = 0
+    with writer:  # frames are written as they come: a whole game would not fit in memory
+        while True:
+            if frames % stride == 0:
+                writer.append_data(venv.get_images()[0])
+            frames += 1
+            obs, _, dones, infos = venv.step(act(obs, infos))
+            if dones[0]:
+                break
+    venv.close()
+    print(f"video: {path} ({math.ceil(frames / stride)} frames)")
 
 
 def baselines_for(run: Path) -> dict[str, float]:
@@ -239,8 +246,11 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
     import matplotlib.pyplot as plt
 
     config = load_config(run / CONFIG_FILE)
-    with open(run / "progress.csv") as file:
-        rows = [row for row in csv.DictReader(file) if row.get("rollout/ep_score_mean")]
+    rows = []
+    for path in sorted(run.glob("progress*.csv")):  # progress_K.csv: before each resume
+        with open(path) as file:
+            rows += [row for row in csv.DictReader(file) if row.get("rollout/ep_score_mean")]
+    rows.sort(key=lambda row: float(row["time/total_timesteps"]))
     if not rows:
         print(f"no learning curve: {run} has no finished training games logged yet")
         return

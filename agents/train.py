@@ -76,6 +76,14 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
     return TrainingCallback()
 
 
+def keep_progress(run: Path) -> None:
+    """Move a run's ``progress.csv`` aside as ``progress_K.csv`` before a resume writes a new
+    one (stable-baselines3 overwrites it); the learning curve reads them all."""
+    progress = run / "progress.csv"
+    if progress.exists():
+        progress.rename(run / f"progress_{len(list(run.glob('progress_*.csv')))}.csv")
+
+
 def set_threads(config: TrainConfig) -> None:
     import torch
 
@@ -113,7 +121,12 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
     set_threads(config)
     algorithm = algorithm_class(config.algo)
     checkpoint = latest_checkpoint(run) if resume else None
-    venv = make_env(config, stats=stats_for(checkpoint[1]) if checkpoint else None)
+    if resume and checkpoint is None:
+        raise ConfigError(f"{run}: no checkpoint to resume from")
+    stats = stats_for(checkpoint[1]) if checkpoint else None
+    if checkpoint and config.env.normalize and stats is None:
+        raise ConfigError(f"{checkpoint[1]}: its VecNormalize statistics are missing")
+    venv = make_env(config, stats=stats)
     if checkpoint is not None and hasattr(venv, "obs_rms"):
         venv.training = True  # the loaded statistics go on learning
         venv.norm_reward = True
@@ -121,6 +134,9 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
         steps, path = checkpoint
         print(f"resuming {run} from {path.name} ({steps} steps)")
         model = algorithm.load(path, env=venv, device=config.device)
+        if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
+            model.learning_starts += model.num_timesteps
+        keep_progress(run)
     else:
         try:
             model = algorithm(
@@ -137,6 +153,8 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
             left, callback=make_callback(config, run), reset_num_timesteps=not resume,
             progress_bar=progress_bar,
         )  # fmt: skip
+    # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.
+    save_model(model, run / CHECKPOINTS, f"step_{model.num_timesteps}")
     save_model(model, run, Path(MODEL_FILE).stem)
     venv.close()
     return run / MODEL_FILE

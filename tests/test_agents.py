@@ -52,19 +52,57 @@ def test_every_shipped_config_trains_and_evaluates(config, tmp_path):
     assert [row["balls_lost"] for row in rows] == ["3", "3"]  # whole games
 
 
-def test_a_run_killed_after_a_checkpoint_resumes_from_it(tmp_path):
-    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")
+@pytest.mark.parametrize("config", ["ppo", "dqn"])
+def test_a_run_killed_after_a_checkpoint_resumes_from_it(config, tmp_path):
+    import pickle
+
+    import stable_baselines3
+
+    algorithm = getattr(stable_baselines3, config.upper())
+    run = tiny_run(ROOT / f"configs/agents/{config}.yaml", tmp_path / "runs")
     # As if killed after the first checkpoint: the later ones and the model never written.
     (run / "model.zip").unlink()
     for path in (run / "checkpoints").glob("*"):
         if not path.name.startswith("step_128"):
             path.unlink()
     assert latest_checkpoint(run)[0] == 128
+    logged = (run / "progress.csv").read_text()
     train.main(["--resume", str(run), "--no-progress"])
-    from stable_baselines3 import PPO
-
-    assert PPO.load(run / "model.zip").num_timesteps == 256
+    model = algorithm.load(run / "model.zip")
+    assert model.num_timesteps == 256
     assert latest_checkpoint(run)[0] == 256
+    assert (run / "progress_0.csv").read_text() == logged  # the curve before the resume kept
+    stats = run / "checkpoints/step_128_vecnormalize.pkl"
+    if stats.exists():  # the normalisation went on from the checkpoint's statistics
+        before = pickle.loads(stats.read_bytes()).obs_rms.count
+        after = pickle.loads((run / "model_vecnormalize.pkl").read_bytes()).obs_rms.count
+        assert after > before > 1
+    if config == "dqn":  # no buffer in a checkpoint: it is refilled before learning again
+        assert model.learning_starts == 128 + 64
+
+
+def test_resume_needs_a_whole_checkpoint(tmp_path, capsys):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")
+    (run / "checkpoints/step_256_vecnormalize.pkl").unlink()
+    with pytest.raises(SystemExit):
+        train.main(["--resume", str(run), "--no-progress"])
+    assert "step_256.zip: its VecNormalize statistics are missing" in capsys.readouterr().err
+    for path in (run / "checkpoints").glob("*"):
+        path.unlink()
+    with pytest.raises(SystemExit):
+        train.main(["--resume", str(run), "--no-progress"])
+    assert "no checkpoint to resume from" in capsys.readouterr().err
+
+
+def test_evaluation_refuses_training_seeds_and_missing_statistics(tmp_path, capsys):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")  # trains on seeds 0-1
+    with pytest.raises(SystemExit):
+        evaluate.main(["--model", str(run), "--episodes", "2", "--seed", "1"])
+    assert "seeds 1..2 overlap the training seeds 0..1" in capsys.readouterr().err
+    (run / "model_vecnormalize.pkl").unlink()
+    with pytest.raises(SystemExit):
+        evaluate.main(["--model", str(run), "--episodes", "1"])
+    assert "VecNormalize statistics are missing" in capsys.readouterr().err
 
 
 def test_a_checkpoint_write_killed_midway_leaves_the_last_one_whole(tmp_path):
@@ -145,7 +183,9 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["hyperparams.n_step=3"], "hyperparams.n_step: not an option of PPO"),
         (["total_timesteps=-1"], "total_timesteps: must be an integer >= 1"),
         (["eval_seed=3"], "eval_seed: 3 overlaps the training seeds"),
-        (["env.id=CartPole-v9"], "env.id: 'CartPole-v9' is not a registered environment"),
+        (["env.id=CartPole-v9"], "env.id: 'CartPole-v9' is not a registered pinball env"),
+        (["env.id=CartPole-v1"], "env.id: 'CartPole-v1' is not a registered pinball env"),
+        (["device=toaster"], "device: not a torch device: 'toaster'"),
         (["seed"], "override 'seed' is not key=value"),
         (["max_minutes=-1"], "max_minutes: must be a number of minutes >= 0"),
     ],
@@ -219,6 +259,7 @@ def test_training_stops_at_its_wall_clock_limit(tmp_path):
 
     steps = PPO.load(run / "model.zip").num_timesteps
     assert 0 < steps < 10_000_000  # stopped in the first rollout past the limit, and saved
+    assert latest_checkpoint(run)[0] == steps  # a resume goes on from there
 
 
 def test_a_checkpoint_evaluates_and_a_curve_brings_its_baselines(tmp_path):
