@@ -63,7 +63,6 @@ from pinball_env.physics.flipper import flipper_distance, flipper_reach, sweep_f
 from pinball_env.physics.sweep import (
     INF,
     norm,
-    point_segment_distance,
     segment_offset,
     sweep_circle,
     sweep_segment,
@@ -155,24 +154,34 @@ def element_props(element, geometry):
 
 
 @njit(cache=True)
-def surface_distance(x, y, element, geometry, angles):
-    """Distance from the point (x, y) to the surface of a solid element (negative inside), the
+def separation(x, y, element, geometry, angles):
+    """Distance from the point (x, y) to the surface of a solid element (negative inside) and
+    the unit normal from the surface towards the point (zero where it is undefined), the
     flippers at ``angles``."""
     j = element - first_circle(geometry)
     if j < 0:
-        s = geometry.segments
-        return point_segment_distance(
-            x, y, s[element, 0], s[element, 1], s[element, 2], s[element, 3]
-        )
-    c = geometry.circles
-    if j < c.shape[0]:
-        return norm(x - c[j, 0], y - c[j, 1]) - c[j, 2]
+        s = geometry.segments[element]
+        gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
+        d = norm(gx, gy)
+        return (d, gx / d, gy / d) if d > 0.0 else (d, 0.0, 0.0)
+    if j < geometry.circles.shape[0]:
+        c = geometry.circles[j]
+        gx, gy = x - c[0], y - c[1]
+        d = norm(gx, gy)
+        return (d - c[2], gx / d, gy / d) if d > 0.0 else (d - c[2], 0.0, 0.0)
     j = element - first_flipper(geometry)
-    f = geometry.flippers
-    d, _, _ = flipper_distance(
-        x, y, f[j, FLIPPER_PIVOT_X], f[j, FLIPPER_PIVOT_Y], f[j, FLIPPER_LENGTH],
-        f[j, FLIPPER_BASE_RADIUS], f[j, FLIPPER_TIP_RADIUS], angles[j],
+    f = geometry.flippers[j]
+    return flipper_distance(
+        x, y, f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y], f[FLIPPER_LENGTH],
+        f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS], angles[j],
     )  # fmt: skip
+
+
+@njit(cache=True)
+def surface_distance(x, y, element, geometry, angles):
+    """Distance from the point (x, y) to the surface of a solid element (negative inside), the
+    flippers at ``angles``: :func:`separation` without the normal."""
+    d, _, _ = separation(x, y, element, geometry, angles)
     return d
 
 
@@ -436,29 +445,6 @@ def release_wedge(x, y, r, flippers, omegas, stops, held_time, pushers, held):
         held[j] = within_reach(x, y, r, flippers[j]) and omegas[j] != 0.0 and stops[j] > held_time
         pinched = pinched or (held[j] and (pushers >> j) & 1 == 1)
     return pinched
-
-
-@njit(cache=True)
-def separation(x, y, element, geometry, angles):
-    """Distance from the point (x, y) to the surface of a solid element (negative inside) and
-    the unit normal from the surface towards the point (zero where it is undefined), the
-    flippers at ``angles``. The same distance as :func:`surface_distance`, bitwise."""
-    j = element - first_circle(geometry)
-    if j < 0:
-        s = geometry.segments[element]
-        gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
-        d = norm(gx, gy)
-        return (d, gx / d, gy / d) if d > 0.0 else (d, 0.0, 0.0)
-    if j < geometry.circles.shape[0]:
-        c = geometry.circles[j]
-        gx, gy = x - c[0], y - c[1]
-        d = norm(gx, gy)
-        return (d - c[2], gx / d, gy / d) if d > 0.0 else (d - c[2], 0.0, 0.0)
-    f = geometry.flippers[element - first_flipper(geometry)]
-    return flipper_distance(
-        x, y, f[FLIPPER_PIVOT_X], f[FLIPPER_PIVOT_Y], f[FLIPPER_LENGTH],
-        f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS], angles[element - first_flipper(geometry)],
-    )  # fmt: skip
 
 
 @njit(cache=True)
