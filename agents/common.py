@@ -75,11 +75,19 @@ def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
         rng = np.random.default_rng(seed)
         space = venv.action_space
         return lambda obs, infos: rng.integers(0, space.n, size=n)
-    table = venv.get_attr("table")[0]
-    players = [HeuristicPolicy(table) for _ in range(n)]
-    return lambda obs, infos: np.array(
-        [player(info) for player, info in zip(players, infos, strict=True)]
-    )
+    world = venv.get_attr("game")[0].world
+    players: dict[int, tuple[Any, HeuristicPolicy]] = {}  # env -> (its table, its player)
+
+    def heuristic(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
+        actions = np.empty(n, dtype=np.int64)
+        for env, info in enumerate(infos):
+            table = world.table_of(env)  # generated tables change from game to game
+            if env not in players or players[env][0] is not table:
+                players[env] = (table, HeuristicPolicy(table))
+            actions[env] = players[env][1](info)
+        return actions
+
+    return heuristic
 
 
 def run_name(config: TrainConfig, when: str) -> str:

@@ -21,6 +21,7 @@ import yaml
 
 from pinball_env import MAX_EPISODE_STEPS
 from pinball_env.env import PinballEnv
+from pinball_env.procgen_env import PinballProcgenEnv
 
 ALGORITHMS = ("ppo", "a2c", "dqn")
 POLICIES = ("MlpPolicy", "CnnPolicy")
@@ -28,8 +29,12 @@ POLICIES = ("MlpPolicy", "CnnPolicy")
 # training config must not set (rendering, and the thread count, which `torch_threads` sets).
 VECTOR_ONLY_KWARGS = ("max_episode_steps",)
 FORBIDDEN_ENV_KWARGS = ("render_mode", "num_threads", "autoreset_mode")
-# The agents train on the native vector env of the pinball envs registered with this entry point.
-PINBALL_ENTRY_POINT = "pinball_env.env:PinballEnv"
+# The agents train on the native vector env of the pinball envs registered with these entry
+# points (Pinball-v0 and PinballProcgen-v0, or another id registered with one of them).
+PINBALL_ENVS = {
+    "pinball_env.env:PinballEnv": PinballEnv,
+    "pinball_env.procgen_env:PinballProcgenEnv": PinballProcgenEnv,
+}
 
 
 class ConfigError(ValueError):
@@ -46,7 +51,7 @@ class EnvConfig:
     """Games stepped side by side (one native vector env)."""
     kwargs: dict[str, Any] = field(default_factory=dict)
     """Options of ``gym.make("Pinball-v0", ...)`` (table, obs_type, frame_skip, shaping...).
-    ``max_episode_steps`` defaults to two minutes of play whatever the frame skip."""
+    A game lasts two minutes of play (``max_frames`` 7200) whatever the frame skip."""
     normalize: bool = False
     """Normalise observations and rewards with stable-baselines3's ``VecNormalize``."""
     frame_stack: int = 1
@@ -59,7 +64,7 @@ class EnvConfig:
     @property
     def make_kwargs(self) -> dict[str, Any]:
         """The options for ``gym.make_vec``, the time limit filled in: 7200 frames."""
-        return {"max_episode_steps": MAX_EPISODE_STEPS // self.frame_skip, **self.kwargs}
+        return {"max_episode_steps": None, "max_frames": MAX_EPISODE_STEPS, **self.kwargs}
 
 
 @dataclass(frozen=True)
@@ -211,11 +216,12 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
         spec = gym.spec(config.env.id) if isinstance(config.env.id, str) else None
     except gym.error.Error:
         spec = None
-    if spec is None or spec.entry_point != PINBALL_ENTRY_POINT:
+    if spec is None or spec.entry_point not in PINBALL_ENVS:
         fail("env.id", f"{config.env.id!r} is not a registered pinball environment")
+    env_class = PINBALL_ENVS[spec.entry_point]
     if not isinstance(config.env.kwargs, dict):
-        fail("env.kwargs", "must be a mapping of Pinball-v0's options")
-    options = set(inspect.signature(PinballEnv.__init__).parameters) - {"self"}
+        fail("env.kwargs", f"must be a mapping of {config.env.id}'s options")
+    options = set(inspect.signature(env_class.__init__).parameters) - {"self"}
     options |= set(VECTOR_ONLY_KWARGS)
     for key in config.env.kwargs:
         if key in FORBIDDEN_ENV_KWARGS or key not in options:
@@ -224,7 +230,7 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
     if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
         fail("env.kwargs.max_episode_steps", f"must be an integer >= 1, got {steps!r}")
     try:  # the env's own checks of its options (a table that cannot be loaded, say)
-        PinballEnv(**{k: v for k, v in config.env.kwargs.items() if k not in VECTOR_ONLY_KWARGS})
+        env_class(**{k: v for k, v in config.env.kwargs.items() if k not in VECTOR_ONLY_KWARGS})
     except (ValueError, TypeError) as error:  # TableError is a ValueError
         fail("env.kwargs", str(error))
     image = config.env.kwargs.get("obs_type", "state") != "state"

@@ -43,14 +43,17 @@ from agents.common import (
 )
 from agents.config import ConfigError, TrainConfig, algorithm_class, config_from_dict, load_config
 
-# The baselines play frame by frame, on the model's table with the default rewards.
-BASELINE_KWARGS = ("table", "balls")
+# The baselines play frame by frame, on the model's table (or layouts) with the default rewards.
+BASELINE_KWARGS = ("table", "balls", "num_layouts", "start_layout", "difficulty")
 
 
 def baseline_config(name: str, config: TrainConfig | None = None) -> TrainConfig:
-    """The config a baseline plays with: the table and balls of ``config``, one frame a step."""
+    """The config a baseline plays with: the env, table (or layouts) and balls of ``config``,
+    one frame a step."""
     kwargs = {} if config is None else config.env.kwargs
     env = {"kwargs": {key: kwargs[key] for key in BASELINE_KWARGS if key in kwargs}}
+    if config is not None:
+        env["id"] = config.env.id
     seed = {} if config is None else {"eval_seed": config.eval_seed}
     return config_from_dict({"env": env, **seed}, f"<{name} baseline>")
 
@@ -59,28 +62,31 @@ def model_policy(model: Any) -> Policy:
     return lambda obs, infos: model.predict(obs, deterministic=True)[0]
 
 
-def rollouts(venv: Any, policy: Policy, frame_skip: int, seeds: list[int]) -> list[dict]:
+def rollouts(
+    venv: Any, policy: Policy, seeds: list[int], layouts: list[int] | None = None
+) -> list[dict]:
     """One whole game per env of ``venv`` (whose env i was seeded with ``seeds[i]``), played by
-    ``policy``; a row of metrics per game."""
+    ``policy`` (on layout ``layouts[i]`` of PinballProcgen-v0); a row of metrics per game."""
     n = venv.num_envs
+    if layouts is not None:
+        venv.unwrapped.set_options({"layout": list(layouts)})
     obs = venv.reset()
     infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
     rows: list[dict | None] = [None] * n
     returns = np.zeros(n)
-    steps = np.zeros(n, dtype=np.int64)
     balls = venv.get_attr("game")[0].balls_per_game
     while any(row is None for row in rows):
         obs, rewards, dones, infos = venv.step(policy(obs, infos))
         playing = np.array([row is None for row in rows])
         returns[playing] += rewards[playing]  # raw: an evaluation VecNormalize leaves them
-        steps[playing] += 1
         for env in np.flatnonzero(dones & playing):
             info = infos[env]
             rows[env] = {
                 "seed": seeds[env],
+                **({} if layouts is None else {"layout": int(info["layout"])}),
                 "score": int(info["score"]),
                 "return": round(float(returns[env]), 6),
-                "length": int(steps[env] * frame_skip),
+                "length": int(info["frames"]),
                 "balls_lost": int(balls - info["balls_left"]),
                 "truncated": bool(info.get("TimeLimit.truncated", False)),
             }
@@ -132,9 +138,11 @@ def evaluate(
     out: Path | None = None,
     video: Path | None = None,
     curve: bool = False,
+    like: TrainConfig | None = None,
 ) -> dict[str, Any]:
     """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
-    returns the summary."""
+    returns the summary. A baseline plays on ``table``, or on the env (and layouts) of the
+    config ``like``."""
     if (policy is None) == (model_path is None):
         raise ConfigError("give a model or a policy (random or heuristic), not both")
     if episodes < 1:
@@ -142,8 +150,9 @@ def evaluate(
     if policy is not None:
         if policy not in BASELINES:
             raise ConfigError(f"unknown policy {policy!r} (known: {', '.join(BASELINES)})")
-        env = {"table": table} if table else {}
-        config = baseline_config(policy, config_from_dict({"env": {"kwargs": env}}))
+        if like is None:
+            like = config_from_dict({"env": {"kwargs": {"table": table} if table else {}}})
+        config = baseline_config(policy, like)
         stats, name = None, policy
         out = out or Path("evals") / policy
     else:
@@ -166,7 +175,7 @@ def evaluate(
     seeds = list(range(first, first + episodes))
     venv = make_env(config, num_envs=episodes, seed=first, stats=stats)
     act = baseline_policy(policy, venv, first) if policy else model_policy(model)
-    rows = rollouts(venv, act, config.env.frame_skip, seeds)
+    rows = rollouts(venv, act, seeds)
     venv.close()
     summary = {"policy": name, "seeds": [first, first + episodes - 1], **summarize(rows)}
     write_results(out, rows, summary)
@@ -175,8 +184,7 @@ def evaluate(
     if curve and model_path is not None and model_path.is_dir():
         baselines = baselines_for(model_path) or {  # played now on the same games
             baseline: evaluate(
-                policy=baseline, table=config.env.kwargs.get("table"), episodes=episodes,
-                seed=first, out=out / baseline,
+                policy=baseline, episodes=episodes, seed=first, out=out / baseline, like=config
             )["score_mean"]
             for baseline in BASELINES
         }  # fmt: skip
@@ -245,16 +253,16 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from agents.train import progress_rows
+
     config = load_config(run / CONFIG_FILE)
-    rows = []
-    for path in sorted(run.glob("progress*.csv")):  # progress_K.csv: before each resume
-        with open(path) as file:
-            rows += [row for row in csv.DictReader(file) if row.get("rollout/ep_score_mean")]
-    rows.sort(key=lambda row: float(row["time/total_timesteps"]))
+    rows = [row for row in progress_rows(run) if row.get("rollout/ep_score_mean")]
     if not rows:
         print(f"no learning curve: {run} has no finished training games logged yet")
         return
-    frames = [float(row["time/total_timesteps"]) * config.env.frame_skip for row in rows]
+    skip = config.env.frame_skip  # runs from before time/frames was logged: steps x skip
+    frames = [float(row.get("time/frames") or float(row["time/total_timesteps"]) * skip)
+              for row in rows]  # fmt: skip
     scores = [float(row["rollout/ep_score_mean"]) for row in rows]
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
     ax.plot(frames, scores, label=f"{config.algo.upper()} (training games, last 100)")
@@ -279,9 +287,8 @@ def report(run: Path, episodes: int = 100) -> dict[str, Any]:
     for name in BASELINES:
         out = run / "eval" / name
         results[name] = evaluate(
-            policy=name, table=config.env.kwargs.get("table"), episodes=episodes,
-            seed=config.eval_seed, out=out,
-        )  # fmt: skip
+            policy=name, episodes=episodes, seed=config.eval_seed, out=out, like=config
+        )
     results["model"] = evaluate(
         model_path=run, episodes=episodes, out=run / "eval" / "model", video=run / "game.gif"
     )

@@ -17,6 +17,7 @@ Models are pickles inside zips: load only models you trust.
 
 import argparse
 import collections
+import csv
 import json
 import platform
 import shutil
@@ -40,10 +41,11 @@ from agents.common import (
 from agents.config import ConfigError, TrainConfig, algorithm_class, load_config, save_config
 
 
-def make_callback(config: TrainConfig, run: Path) -> Any:
+def make_callback(config: TrainConfig, run: Path, frames: int = 0) -> Any:
     """Checkpoints every ``checkpoint_every`` env steps, the mean game score of the last 100
-    training games logged as ``rollout/ep_score_mean`` (the score, not the shaped return), and
-    the stop at ``max_minutes``."""
+    training games logged as ``rollout/ep_score_mean`` (the score, not the shaped return), the
+    frames played by all envs as ``time/frames`` (counted on from ``frames``), and the stop at
+    ``max_minutes``."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class TrainingCallback(BaseCallback):
@@ -52,6 +54,8 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
             self.scores: collections.deque = collections.deque(maxlen=100)
             self.truncated: collections.deque = collections.deque(maxlen=100)
             self.next_checkpoint = 0
+            self.frames = frames
+            self.game_frames = np.zeros(config.env.num_envs, dtype=np.int64)  # of each game
 
         def _on_training_start(self) -> None:
             every = config.checkpoint_every
@@ -59,7 +63,11 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
             self.deadline = time.monotonic() + 60.0 * config.max_minutes
 
         def _on_step(self) -> bool:
-            for done, info in zip(self.locals["dones"], self.locals["infos"], strict=True):
+            infos = self.locals["infos"]
+            for env, (done, info) in enumerate(zip(self.locals["dones"], infos, strict=True)):
+                # A step's frames vary with skip_above and the end of a game: count them.
+                self.frames += info["frames"] - self.game_frames[env]
+                self.game_frames[env] = 0 if done else info["frames"]
                 if done:
                     self.scores.append(info["score"])
                     self.truncated.append(info.get("TimeLimit.truncated", False))
@@ -69,6 +77,7 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
             return not config.max_minutes or time.monotonic() < self.deadline
 
         def _on_rollout_end(self) -> None:
+            self.logger.record("time/frames", self.frames)
             if self.scores:
                 self.logger.record("rollout/ep_score_mean", float(np.mean(self.scores)))
                 self.logger.record("rollout/ep_truncated", float(np.mean(self.truncated)))
@@ -76,12 +85,25 @@ def make_callback(config: TrainConfig, run: Path) -> Any:
     return TrainingCallback()
 
 
-def keep_progress(run: Path) -> None:
+def keep_progress(run: Path) -> int:
     """Move a run's ``progress.csv`` aside as ``progress_K.csv`` before a resume writes a new
-    one (stable-baselines3 overwrites it); the learning curve reads them all."""
+    one (stable-baselines3 overwrites it); the learning curve reads them all. Returns the last
+    ``time/frames`` logged, for the count to go on from."""
     progress = run / "progress.csv"
     if progress.exists():
         progress.rename(run / f"progress_{len(list(run.glob('progress_*.csv')))}.csv")
+    frames = [row.get("time/frames") for row in progress_rows(run)]
+    return max((int(float(f)) for f in frames if f), default=0)
+
+
+def progress_rows(run: Path) -> list[dict[str, str]]:
+    """The rows of every progress file of a run (progress_K.csv: before each resume), in the
+    order of the env steps."""
+    rows = []
+    for path in sorted(run.glob("progress*.csv")):
+        with open(path) as file:
+            rows += list(csv.DictReader(file))
+    return sorted(rows, key=lambda row: float(row["time/total_timesteps"]))
 
 
 def set_threads(config: TrainConfig) -> None:
@@ -136,8 +158,9 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
         model = algorithm.load(path, env=venv, device=config.device)
         if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
             model.learning_starts += model.num_timesteps
-        keep_progress(run)
+        frames = keep_progress(run)
     else:
+        frames = 0
         try:
             model = algorithm(
                 config.policy, venv, seed=config.seed, device=config.device, verbose=0,
@@ -150,7 +173,7 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
     left = config.total_timesteps - model.num_timesteps
     if left > 0:
         model.learn(
-            left, callback=make_callback(config, run), reset_num_timesteps=not resume,
+            left, callback=make_callback(config, run, frames), reset_num_timesteps=not resume,
             progress_bar=progress_bar,
         )  # fmt: skip
     # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.

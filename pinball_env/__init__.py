@@ -1,12 +1,15 @@
 """A pinball table for reinforcement learning, moved by swept (continuous) collision.
 
-Importing the package registers ``Pinball-v0`` with Gymnasium::
+Importing the package registers ``Pinball-v0`` (the classic table, or any other) and
+``PinballProcgen-v0`` (a generated table each game, see ``pinball_env.procgen_env``) with
+Gymnasium::
 
     import gymnasium as gym
     import pinball_env  # noqa: F401
 
     env = gym.make("Pinball-v0", table="classic", obs_type="state")
     envs = gym.make_vec("Pinball-v0", num_envs=1024)  # the native vector env, PinballVectorEnv
+    env = gym.make("PinballProcgen-v0", num_layouts=16, start_layout=0, difficulty="easy")
 """
 
 from gymnasium.envs.registration import register
@@ -20,5 +23,12 @@ register(
     id="Pinball-v0",
     entry_point="pinball_env.env:PinballEnv",
     vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    max_episode_steps=MAX_EPISODE_STEPS,
+)
+
+register(
+    id="PinballProcgen-v0",
+    entry_point="pinball_env.procgen_env:PinballProcgenEnv",
+    vector_entry_point="pinball_env.procgen_env:PinballProcgenVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
 )

@@ -11,8 +11,9 @@ from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Box, Space
 
 from pinball_env.game import DISCRETE_BUTTONS, Game, InvalidActions, check_choice
+from pinball_env.procgen import load_any_table
 from pinball_env.render import Renderer, Window, render_size, scoreboard
-from pinball_env.table import BUTTONS, Table, load_table
+from pinball_env.table import BUTTONS, Table
 
 OBS_TYPES = ("state", "rgb", "grayscale")
 
@@ -102,14 +103,16 @@ class PinballEnv(gym.Env):
 
     ``info`` (reset and step): ``ball_position``, ``ball_velocity`` (float64 arrays, m and m/s),
     ``score`` (points this game), ``balls_left``, ``events`` (scoring element name -> hits this
-    step), ``points`` (this step) and ``drained`` (a ball drained this step).
+    step), ``points`` (this step), ``drained`` (a ball drained this step) and ``frames``
+    (frames played in this game).
 
     ## Arguments
 
     ```python
     gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
              reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, frame_skip=1,
-             image_size=(84, 84), physics="swept", render_mode=None)
+             skip_above=0.0, max_frames=None, image_size=(84, 84), physics="swept",
+             render_mode=None)
     ```
 
     - ``table``: a built-in table name (``"classic"``; the built-in tables are package data in
@@ -124,6 +127,13 @@ class PinballEnv(gym.Env):
     - ``drain_penalty``: reward taken off for each ball that drains (0 = off).
     - ``frame_skip``: frames per step (1-60), the action held on each; rewards, ``points`` and
       ``drained`` are summed over them, and a game that ends stops there.
+    - ``skip_above``: a training aid, 0 (off) or a height in table heights (0-1): after the
+      step's frames, while the ball is in play above that height, the buttons are released and
+      the step runs on (up to 60 more frames), so that the agent is asked only while the ball
+      is low, near the flippers.
+    - ``max_frames``: None, or the frames a game lasts: the step that reaches it stops there
+      and returns ``truncated`` (a time limit in frames, whatever the frame skip; the
+      ``TimeLimit`` wrapper's ``max_episode_steps`` counts steps).
     - ``image_size``: (height, width) of image observations, in pixels, or one int for a square.
     - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
       pymunk, for cross-checks; needs the ``crosscheck`` extra).
@@ -149,6 +159,8 @@ class PinballEnv(gym.Env):
         height_shaping: float = 0.0,
         drain_penalty: float = 0.0,
         frame_skip: int = 1,
+        skip_above: float = 0.0,
+        max_frames: int | None = None,
         image_size: int | tuple[int, int] = (84, 84),
         physics: str = "swept",
         render_mode: str | None = None,
@@ -156,11 +168,12 @@ class PinballEnv(gym.Env):
         check_choice("obs_type", obs_type, OBS_TYPES)
         check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
         self.image_size = _image_size(image_size)
-        self.table = table if isinstance(table, Table) else load_table(table)
+        self.table = table if isinstance(table, Table) else load_any_table(table)
         self.game = Game(
             self.table, n_envs=1, balls_per_game=balls, action_type=action_type,
             reward_scale=reward_scale, height_shaping=height_shaping,
-            drain_penalty=drain_penalty, frame_skip=frame_skip, physics=physics,
+            drain_penalty=drain_penalty, frame_skip=frame_skip, skip_above=skip_above,
+            max_frames=max_frames, physics=physics,
         )  # fmt: skip
         self.obs_type = obs_type
         self.action_type = action_type
@@ -184,11 +197,11 @@ class PinballEnv(gym.Env):
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        self.game.new_game(0, self.np_random, options)
+        self._new_game(options)
         self._reset_done = True
         if self.render_mode == "human":
             self.render()
-        return self._observe(), self.game.info(0)
+        return self._observe(), self._info()
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if not self._reset_done:
@@ -201,7 +214,8 @@ class PinballEnv(gym.Env):
             ) from None
         if self.render_mode == "human":
             self.render()
-        return self._observe(), float(reward[0]), bool(game_over[0]), False, self.game.info(0)
+        out_of_time = bool(self.game.out_of_time()[0])
+        return self._observe(), float(reward[0]), bool(game_over[0]), out_of_time, self._info()
 
     def render(self) -> np.ndarray | None:
         if self.render_mode is None:
@@ -242,6 +256,12 @@ class PinballEnv(gym.Env):
         return self.game.height_shaping
 
     # --- helpers ----------------------------------------------------------------------------
+
+    def _new_game(self, options: Mapping[str, Any] | None) -> None:
+        self.game.new_game(0, self.np_random, options)
+
+    def _info(self) -> dict[str, Any]:
+        return self.game.info(0)
 
     def _moving_parts(self) -> tuple[tuple[float, float] | None, np.ndarray]:
         world = self.game.world

@@ -7,7 +7,6 @@ during play is in one record, :class:`GameState`, so that a game can be snapshot
 as one object.
 """
 
-import copy
 import math
 import numbers
 import reprlib
@@ -19,7 +18,7 @@ from numba import njit
 
 from pinball_env.backends import make_world
 from pinball_env.physics import State
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, FLIPPER_REST_ANGLE
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.table import BUTTONS, Table, check_ball_state
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
@@ -37,6 +36,9 @@ RESET_OPTIONS = ("ball_position", "ball_velocity")
 BALL_SEARCH_TIME = 10.0
 # Most frames one step may hold an action for (a second at 60 Hz).
 MAX_FRAME_SKIP = 60
+# Most frames one step runs on with the buttons released while the ball is high (skip_above):
+# then the agent is asked again, wherever the ball is.
+MAX_SKIP_FRAMES = 60
 
 
 class InvalidActions(ValueError):
@@ -59,6 +61,7 @@ class GameState(NamedTuple):
     drained: np.ndarray  # (N,) bool: a ball drained in the last step
     anchor: np.ndarray  # (N, 2) float64: where the ball was when it last moved a radius [m]
     still_frames: np.ndarray  # (N,) int64: frames since then (see BALL_SEARCH_TIME)
+    frames: np.ndarray  # (N,) int64: frames played in the current game
 
 
 class Game:
@@ -76,6 +79,12 @@ class Game:
         drain_penalty: reward taken off for each ball that drains (0 = off).
         frame_skip: frames per step, the action repeated on each (rewards, points and drains
             summed; a game that ends stops there).
+        skip_above: 0 (off), or a height in table heights (0-1): after the step's frames, while
+            the ball is in play above it, the buttons are released and the step runs on (at
+            most MAX_SKIP_FRAMES more frames), so that the agent acts only when the ball is
+            low. A training aid: the decisions far from the flippers are left out.
+        max_frames: None, or the frames a game lasts before it runs out of time
+            (:meth:`out_of_time`; a step stops there).
         physics: the World backend, ``"swept"`` or ``"pymunk"``.
         num_threads: threads that share the envs of a frame (the swept kernel).
 
@@ -94,6 +103,8 @@ class Game:
         height_shaping: float = 0.0,
         drain_penalty: float = 0.0,
         frame_skip: int = 1,
+        skip_above: float = 0.0,
+        max_frames: int | None = None,
         physics: str = "swept",
         num_threads: int = 1,
     ) -> None:
@@ -113,6 +124,11 @@ class Game:
             raise ValueError(
                 f"frame_skip must be an integer from 1 to {MAX_FRAME_SKIP}, got {frame_skip!r}"
             )
+        real = isinstance(skip_above, numbers.Real) and not isinstance(skip_above, bool)
+        if not real or not 0.0 <= skip_above < 1.0:
+            raise ValueError(f"skip_above must be a number in [0, 1), got {skip_above!r}")
+        if max_frames is not None and (not _is_int(max_frames) or max_frames < 1):
+            raise ValueError(f"max_frames must be None or an integer >= 1, got {max_frames!r}")
         self.table = table
         self.balls_per_game = int(balls_per_game)
         self.action_type = action_type
@@ -120,6 +136,8 @@ class Game:
         self.height_shaping = float(height_shaping)
         self.drain_penalty = float(drain_penalty)
         self.frame_skip = int(frame_skip)
+        self.skip_above = float(skip_above)
+        self.max_frames = None if max_frames is None else int(max_frames)
         self.world = make_world(table, n_envs, physics, num_threads)
         self.state = GameState(
             world=self.world.state,
@@ -130,15 +148,40 @@ class Game:
             drained=np.zeros(n_envs, dtype=bool),
             anchor=np.zeros((n_envs, 2)),
             still_frames=np.zeros(n_envs, dtype=np.int64),
+            frames=np.zeros(n_envs, dtype=np.int64),
+        )
+        self._everyone = np.ones(n_envs, dtype=bool)
+        self._released = np.zeros(  # the actions that hold no button
+            n_envs if action_type == "discrete" else (n_envs, len(BUTTONS)), dtype=np.int64
         )
         self.ball_search_frames = round(BALL_SEARCH_TIME * table.simulation.frame_rate)
-        rest = self.world.geometry.flippers[:, FLIPPER_REST_ANGLE]
-        up = np.radians([f.up_angle for f in table.flippers])
-        self._rest = rest
-        self._up_sign = np.sign(up - rest)  # +1 for an upstroke counter-clockwise, -1 clockwise
-        self._swing = np.abs(up - rest)
-        self._max_omega = np.array([max(f.up_speed, f.down_speed) for f in table.flippers])
-        self._scoring = np.flatnonzero(table.element_scores)
+        # Per env (rows), for set_table: the flippers' rest angles, the sign of their upstroke
+        # (+1 counter-clockwise), their swings and top speeds, and the table's height.
+        flippers = np.array([_flipper_numbers(table)] * n_envs).reshape(n_envs, 4, -1)
+        self._rest, self._up_sign, self._swing, self._max_omega = flippers.transpose(1, 0, 2)
+        self._width = np.full(n_envs, table.width)
+        self._height = np.full(n_envs, table.height)
+        self._scoring = [np.flatnonzero(table.element_scores)] * n_envs  # scoring element ids
+
+    def set_table(self, env: int, table: Table) -> None:
+        """Make env ``env`` play ``table`` (see ``World.set_table``); start a new game after.
+        The other envs' games go on."""
+        check_playable(table)
+        ball, simulation = table.ball, table.simulation
+        if ball.radius != self.table.ball.radius or simulation != self.table.simulation:
+            raise ValueError(
+                f"table {table.name!r} has another ball size or simulation settings than "
+                f"{self.table.name!r}: every env of a game needs the same"
+            )
+        self.world.set_table(env, table)
+        self.state = self.state._replace(world=self.world.state)  # it may have grown
+        numbers = _flipper_numbers(table)
+        for array, row in zip((self._rest, self._up_sign, self._swing, self._max_omega),
+                              numbers, strict=True):  # fmt: skip
+            array[env] = row
+        self._width[env] = table.width
+        self._height[env] = table.height
+        self._scoring[env] = np.flatnonzero(table.element_scores)
 
     @property
     def n_envs(self) -> int:
@@ -182,9 +225,10 @@ class Game:
                 f"(allowed: {', '.join(RESET_OPTIONS)})"
             )
         if options:
-            position = options.get("ball_position", self.table.plunger.position)
+            table = self.world.table_of(env)
+            position = options.get("ball_position", table.plunger.position)
             velocity = options.get("ball_velocity", (0.0, 0.0))
-            position, velocity = check_ball_state(self.table, position, velocity, "reset options")
+            position, velocity = check_ball_state(table, position, velocity, "reset options")
         self.world.rest_flippers(env)
         state = self.state
         state.world.hits[env] = 0  # the reset's info shows no events of the last game
@@ -193,6 +237,7 @@ class Game:
         state.score[env] = 0
         state.points[env] = 0
         state.drained[env] = False
+        state.frames[env] = 0
         self.launch(env, rng)
         if options:
             self.world.place_ball(env, position, velocity)
@@ -200,7 +245,7 @@ class Game:
 
     def launch(self, env: int, rng: np.random.Generator) -> None:
         """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range."""
-        low, high = self.table.plunger.speed
+        low, high = self.world.table_of(env).plunger.speed
         self.world.launch(env, float(rng.uniform(low, high)))
         self._moved(env)
 
@@ -240,34 +285,53 @@ class Game:
         frozen: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """One step of every env with ``actions`` (see :meth:`buttons`): ``frame_skip`` frames,
-        the actions held on each. A drained ball is replaced by the next one off the plunger
-        (drawn from the env's ``rngs`` entry); the game ends when the last ball drains, and an
-        env whose game ends stays as it is for the rest of the step. Envs where ``frozen``
-        (n_envs,) bool is set keep their state as it is (a vector env's envs that have just
-        been reset), with reward 0.
+        the actions held on each; then, with ``skip_above``, more frames with the buttons
+        released while the ball is high. A drained ball is replaced by the next one off the
+        plunger (drawn from the env's ``rngs`` entry); the game ends when the last ball drains.
+        An env whose game ends, or runs out of time (``max_frames``), stays as it is for the
+        rest of the step. Envs where ``frozen`` (n_envs,) bool is set keep their state as it is
+        (a vector env's envs that have just been reset), with reward 0.
 
         Returns ``(reward, game_over)``, (n_envs,) float64 and bool, the reward summed over the
         frames. The step's points and drains (summed) are in :attr:`state`.
         """
-        if self.frame_skip == 1:
+        if self.frame_skip == 1 and not self.skip_above and self.max_frames is None:
             return self.step_frame(actions, rngs, frozen)
         state = self.state
         still = np.zeros(self.n_envs, dtype=bool) if frozen is None else frozen.copy()
+        still |= self.out_of_time()
         total = np.zeros(self.n_envs)
         points = np.zeros(self.n_envs, dtype=np.int64)
         drained = np.zeros(self.n_envs, dtype=bool)
-        for _ in range(self.frame_skip):
-            reward, game_over = self.step_frame(actions, rngs, still if still.any() else None)
-            moved = ~still
+
+        def frame(actions: Any, idle: np.ndarray) -> np.ndarray:
+            reward, game_over = self.step_frame(actions, rngs, idle if idle.any() else None)
+            moved = ~idle
             total[moved] += reward[moved]
             points[moved] += state.points[moved]
             drained[moved] |= state.drained[moved]
-            still |= game_over
+            return game_over | self.out_of_time()
+
+        for _ in range(self.frame_skip):
             if still.all():
                 break
+            still |= frame(actions, still)
+        if self.skip_above:
+            limit = self.skip_above * self._height
+            for _ in range(MAX_SKIP_FRAMES):
+                high = ~still & self.world.active & (self.world.balls[:, BALL_Y] > limit)
+                if not high.any():
+                    break
+                still |= frame(self._released, ~high)
         state.points[:] = points
         state.drained[:] = drained
         return total, state.balls_left == 0
+
+    def out_of_time(self) -> np.ndarray:
+        """(n_envs,) bool: the game has played ``max_frames`` frames (never, without)."""
+        if self.max_frames is None:
+            return np.zeros(self.n_envs, dtype=bool)
+        return self.state.frames >= self.max_frames
 
     def step_frame(
         self,
@@ -275,47 +339,52 @@ class Game:
         rngs: Sequence[np.random.Generator],
         frozen: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """One frame of every env: :meth:`step` with ``frame_skip`` 1."""
-        if frozen is not None and frozen.any():
-            envs = np.flatnonzero(frozen)
-            saved = _take_rows(self.state, envs)
-            # A frozen env's draws go to a copy of its stream: it must not move on either.
-            rngs = [copy.deepcopy(rng) if frozen[i] else rng for i, rng in enumerate(rngs)]
-            reward, _ = self.step_frame(actions, rngs)
-            _put_rows(saved, self.state, envs)
-            reward[envs] = 0.0
-            return reward, self.state.balls_left == 0
+        """One frame of every env: :meth:`step` with ``frame_skip`` 1 and no ``skip_above``.
+        Frozen envs are not stepped at all (their arrays keep every value, their streams draw
+        nothing)."""
         buttons = self.buttons(actions)
+        moving = None if frozen is None or not frozen.any() else ~frozen
         state, balls = self.state, self.world.balls
         height_before = balls[:, BALL_Y].copy() if self.height_shaping else None
-        self.world.step(buttons)
+        self.world.step(buttons, moving)
         points = self.world.frame_points()
+        if moving is not None:
+            points[frozen] = 0  # their hits are those of their last frame
         state.score[:] += points
         drained = state.balls_left > 0
-        drained &= ~self.world.active
+        drained &= ~self.world.active  # never a frozen env's: its ball was launched
         state.drain_height[drained] = balls[drained, BALL_Y]
         state.balls_left[:] -= drained
         for env in np.flatnonzero(drained & (state.balls_left > 0)):
             self.launch(env, rngs[env])
-        self._search_balls(rngs)
-        state.points[:] = points
-        state.drained[:] = drained
+        self._search_balls(rngs, moving)
+        if moving is None:
+            state.frames[:] += 1
+            state.points[:] = points
+            state.drained[:] = drained
+        else:
+            state.frames[moving] += 1
+            state.points[moving] = points[moving]
+            state.drained[moving] = drained[moving]
         reward = points * self.reward_scale
         if self.drain_penalty:
             reward -= self.drain_penalty * drained
         if self.height_shaping:
             # A drained ball's last height is where it crossed the drain, not the next ball's.
             height_after = np.where(drained, state.drain_height, balls[:, BALL_Y])
-            reward += self.height_shaping * (height_after - height_before) / self.table.height
+            reward += self.height_shaping * (height_after - height_before) / self._height
         return reward, state.balls_left == 0
 
-    def _search_balls(self, rngs: Sequence[np.random.Generator]) -> None:
+    def _search_balls(
+        self, rngs: Sequence[np.random.Generator], moving: np.ndarray | None = None
+    ) -> None:
         """Ball search (see BALL_SEARCH_TIME): serve again every ball in play that has not
-        moved a ball radius for that long."""
+        moved a ball radius for that long (of the ``moving`` envs; None: all)."""
         state = self.state
         due = _count_still_frames(
             self.world.balls, self.world.active, state.anchor, state.still_frames,
             self.table.ball.radius, self.ball_search_frames,
+            self._everyone if moving is None else moving,
         )  # fmt: skip
         if due:
             for env in np.flatnonzero(state.still_frames >= self.ball_search_frames):
@@ -323,38 +392,55 @@ class Game:
 
     # --- what the agent sees ------------------------------------------------------------------
 
-    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of :meth:`observe` (float32, one entry per feature)."""
-        n_flippers = len(self._rest)
+    def observation_bounds(self, normalised: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of :meth:`observe` (float32, one entry per feature), on the
+        game's table (on any, ``normalised``)."""
+        rest, _, swing, max_omega = _flipper_numbers(self.table)
+        if normalised:
+            n = len(rest)
+            low = np.array([0.0, 0.0, -MAX_OBS_SPEED, -MAX_OBS_SPEED] + [0.0] * n + [-1.0] * n
+                           + [0.0, 0.0])  # fmt: skip
+            high = np.array([1.0, 1.0, MAX_OBS_SPEED, MAX_OBS_SPEED] + [1.0] * (2 * n)
+                            + [1.0, float(self.balls_per_game)])  # fmt: skip
+            return low.astype(np.float32), high.astype(np.float32)
         low = np.concatenate(
-            [[0.0, 0.0, -MAX_OBS_SPEED, -MAX_OBS_SPEED], np.zeros(n_flippers),
-             -self._max_omega, [0.0, 0.0]]
+            [[0.0, 0.0, -MAX_OBS_SPEED, -MAX_OBS_SPEED], np.zeros(len(rest)), -max_omega,
+             [0.0, 0.0]]
         )  # fmt: skip
         high = np.concatenate(
-            [[self.table.width, self.table.height, MAX_OBS_SPEED, MAX_OBS_SPEED], self._swing,
-             self._max_omega, [1.0, float(self.balls_per_game)]]
+            [[self.table.width, self.table.height, MAX_OBS_SPEED, MAX_OBS_SPEED], swing,
+             max_omega, [1.0, float(self.balls_per_game)]]
         )  # fmt: skip
         return low.astype(np.float32), high.astype(np.float32)
 
-    def observe(self) -> np.ndarray:
+    def observe(self, normalised: bool = False) -> np.ndarray:
         """(n_envs, 4 + 2F + 2) float32: ball x, y, vx, vy; each flipper's angle above rest and
-        angular velocity towards up; ball in play; balls left. See PinballEnv's docstring."""
+        angular velocity towards up; ball in play; balls left. See PinballEnv's docstring.
+        ``normalised``: positions in table widths and heights, flipper angles in swings and
+        angular velocities in top speeds (the same bounds on every table)."""
         world = self.world.state
-        return _state_observation(
+        obs = _state_observation(
             world.balls, world.flipper_angle, world.flipper_omega, world.active,
             self.state.balls_left, self._rest, self._up_sign,
         )  # fmt: skip
+        if normalised:
+            n = self._swing.shape[1]
+            obs[:, 0] /= self._width
+            obs[:, 1] /= self._height
+            obs[:, 4 : 4 + n] /= self._swing
+            obs[:, 4 + n : 4 + 2 * n] /= self._max_omega
+        return obs
 
     def events(self, env: int) -> dict[str, int]:
         """The scoring elements env ``env`` hit in the last step: name -> hits."""
         hits = self.world.state.hits[env]
-        names = self.table.element_names
-        return {names[i]: int(hits[i]) for i in self._scoring if hits[i]}
+        names = self.world.table_of(env).element_names
+        return {names[i]: int(hits[i]) for i in self._scoring[env] if hits[i]}
 
     def infos(self) -> dict[str, np.ndarray]:
         """The per-step info of every env as arrays (first axis the env): ``ball_position`` [m],
-        ``ball_velocity`` [m/s], ``score``, ``balls_left``, ``points`` (this step) and
-        ``drained`` (a ball drained this step)."""
+        ``ball_velocity`` [m/s], ``score``, ``balls_left``, ``points`` (this step),
+        ``drained`` (a ball drained this step) and ``frames`` (played in this game)."""
         state, balls = self.state, self.world.balls
         return {
             "ball_position": balls[:, [BALL_X, BALL_Y]],
@@ -363,6 +449,7 @@ class Game:
             "balls_left": state.balls_left.copy(),
             "points": state.points.copy(),
             "drained": state.drained.copy(),
+            "frames": state.frames.copy(),
         }
 
     def info(self, env: int) -> dict[str, Any]:
@@ -377,16 +464,28 @@ class Game:
             "events": self.events(env),
             "points": int(state.points[env]),
             "drained": bool(state.drained[env]),
+            "frames": int(state.frames[env]),
         }
 
 
+def _flipper_numbers(table: Table) -> np.ndarray:
+    """(4, F): the flippers' rest angles [rad], upstroke signs (+1 counter-clockwise), swings
+    [rad] and top angular speeds [rad/s]."""
+    rest = np.array([math.radians(f.rest_angle) for f in table.flippers])  # as Table.pack
+    up = np.radians([f.up_angle for f in table.flippers])
+    top = [max(f.up_speed, f.down_speed) for f in table.flippers]
+    return np.array([rest, np.sign(up - rest), np.abs(up - rest), top])
+
+
 @njit(cache=True)
-def _count_still_frames(balls, active, anchor, still_frames, radius, limit):
-    """Count, per env, the frames since its ball last moved ``radius`` away from ``anchor``
-    (restarting the count and the anchor when it does, or is out of play). Returns whether a
-    count reached ``limit``. Compiled: the single env pays it every step."""
+def _count_still_frames(balls, active, anchor, still_frames, radius, limit, moving):
+    """Count, per env that is ``moving``, the frames since its ball last moved ``radius`` away
+    from ``anchor`` (restarting the count and the anchor when it does, or is out of play).
+    Returns whether a count reached ``limit``. Compiled: the single env pays it every step."""
     due = False
     for env in range(balls.shape[0]):
+        if not moving[env]:
+            continue
         dx = balls[env, BALL_X] - anchor[env, 0]
         dy = balls[env, BALL_Y] - anchor[env, 1]
         if not active[env] or dx * dx + dy * dy > radius * radius:
@@ -412,8 +511,8 @@ def _state_observation(balls, flipper_angle, flipper_omega, active, balls_left, 
         obs[env, 3] = min(max(balls[env, BALL_VY], -MAX_OBS_SPEED), MAX_OBS_SPEED)
         for j in range(n_flippers):
             # The angle above rest (the kernel stops it exactly) and the speed towards up.
-            obs[env, 4 + j] = (flipper_angle[env, j] - rest[j]) * up_sign[j]
-            obs[env, 4 + n_flippers + j] = flipper_omega[env, j] * up_sign[j]
+            obs[env, 4 + j] = (flipper_angle[env, j] - rest[env, j]) * up_sign[env, j]
+            obs[env, 4 + n_flippers + j] = flipper_omega[env, j] * up_sign[env, j]
         obs[env, 4 + 2 * n_flippers] = active[env]
         obs[env, 5 + 2 * n_flippers] = balls_left[env]
     return obs
@@ -446,20 +545,6 @@ def _is_int(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
-def _take_rows(record: tuple, rows: np.ndarray) -> Any:
-    """A copy of the given env rows of every array of a record (and nested records)."""
-    return type(record)(*(_take_rows(v, rows) if isinstance(v, tuple) else v[rows] for v in record))
-
-
-def _put_rows(source: tuple, target: tuple, rows: np.ndarray) -> None:
-    """Write rows taken by :func:`_take_rows` back into the same rows of ``target``."""
-    for src, dst in zip(source, target, strict=True):
-        if isinstance(dst, tuple):
-            _put_rows(src, dst, rows)
-        else:
-            dst[rows] = src
-
-
 def _copy(record: tuple) -> Any:
     """A deep copy of a record of arrays (and nested records)."""
     return type(record)(*(_copy(v) if isinstance(v, tuple) else v.copy() for v in record))
@@ -477,7 +562,9 @@ def _copy_into(source: tuple, target: tuple) -> None:
 __all__ = [
     "ACTION_TYPES",
     "DISCRETE_BUTTONS",
+    "MAX_FRAME_SKIP",
     "MAX_OBS_SPEED",
+    "MAX_SKIP_FRAMES",
     "RESET_OPTIONS",
     "Game",
     "GameState",

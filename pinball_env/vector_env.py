@@ -23,8 +23,9 @@ from pinball_env.env import (
     render_frame,
 )
 from pinball_env.game import Game, InvalidActions, check_choice
+from pinball_env.procgen import load_any_table
 from pinball_env.render import Renderer, render_size
-from pinball_env.table import Table, load_table
+from pinball_env.table import Table
 
 # Envs per thread below which a second thread costs more than it saves.
 MIN_ENVS_PER_THREAD = 32
@@ -46,8 +47,8 @@ class PinballVectorEnv(VectorEnv):
     ```python
     gym.make_vec("Pinball-v0", num_envs=1024, table="classic", obs_type="state",
                  action_type="discrete", balls=3, reward_scale=0.01, height_shaping=0.0,
-                 drain_penalty=0.0, frame_skip=1, image_size=(84, 84), physics="swept",
-                 render_mode=None,
+                 drain_penalty=0.0, frame_skip=1, skip_above=0.0, max_frames=None,
+                 image_size=(84, 84), physics="swept", render_mode=None,
                  max_episode_steps=7200, num_threads=None, autoreset_mode="NextStep")
     ```
 
@@ -56,7 +57,8 @@ class PinballVectorEnv(VectorEnv):
     - ``num_envs``: games stepped together.
     - ``max_episode_steps``: truncation after this many steps of an episode (None: never);
       ``gym.make_vec`` passes the registered 7200 (with ``frame_skip=k``, pass 7200 // k for
-      the same two minutes).
+      the same two minutes, or None and ``max_frames=7200``, which counts frames whatever the
+      frame skip or ``skip_above``).
     - ``num_threads``: threads that share the envs (None: one per core while each has at least
       32 envs). Results are bitwise the same for any count.
     - ``autoreset_mode``: ``NEXT_STEP`` (Gymnasium's default: an env that ended is reset by the
@@ -67,8 +69,8 @@ class PinballVectorEnv(VectorEnv):
     ## Infos
 
     Arrays over the envs, each with a ``_key`` mask: ``ball_position`` (N, 2), ``ball_velocity``
-    (N, 2), ``score``, ``balls_left``, ``points`` (this step) and ``drained``; when episodes
-    end, ``episode_return`` and ``episode_length`` masked by the envs that ended (the key
+    (N, 2), ``score``, ``balls_left``, ``points`` (this step), ``drained`` and ``frames``; when
+    episodes end, ``episode_return`` and ``episode_length`` masked by the envs that ended (the key
     ``episode`` is left to Gymnasium's ``RecordEpisodeStatistics``). In SAME_STEP mode,
     ``final_obs`` (an object array) and ``final_info`` (arrays with their own ``_key`` masks)
     hold the ended envs' last observation and info, as ``SyncVectorEnv`` does. The per-step
@@ -97,6 +99,8 @@ class PinballVectorEnv(VectorEnv):
         height_shaping: float = 0.0,
         drain_penalty: float = 0.0,
         frame_skip: int = 1,
+        skip_above: float = 0.0,
+        max_frames: int | None = None,
         image_size: int | tuple[int, int] = (84, 84),
         physics: str = "swept",
         render_mode: str | None = None,
@@ -117,12 +121,13 @@ class PinballVectorEnv(VectorEnv):
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         self.num_envs = int(num_envs)
         self.image_size = _image_size(image_size)
-        self.table = table if isinstance(table, Table) else load_table(table)
+        self.table = table if isinstance(table, Table) else load_any_table(table)
         threads = default_threads(self.num_envs) if num_threads is None else num_threads
         self.game = Game(
             self.table, n_envs=self.num_envs, balls_per_game=balls, action_type=action_type,
             reward_scale=reward_scale, height_shaping=height_shaping,
-            drain_penalty=drain_penalty, frame_skip=frame_skip, physics=physics,
+            drain_penalty=drain_penalty, frame_skip=frame_skip, skip_above=skip_above,
+            max_frames=max_frames, physics=physics,
             num_threads=threads if physics == "swept" else 1,
         )  # fmt: skip
         self.num_threads = self.game.world.threads.num_threads
@@ -164,7 +169,7 @@ class PinballVectorEnv(VectorEnv):
         for env in envs:
             if seeds[env] is not None:
                 self._rngs[env] = seeding.np_random(seeds[env])[0]
-            self.game.new_game(int(env), self._rngs[env], options)
+            self._new_game(int(env), options)
         self._returns[envs] = 0.0
         self._lengths[envs] = 0
         self._ended[envs] = False
@@ -178,7 +183,7 @@ class PinballVectorEnv(VectorEnv):
             raise ResetNeeded("call reset() before step(): no game has started")
         restart = self._ended.copy()
         for env in np.flatnonzero(restart):  # NEXT_STEP: the envs that ended last step
-            self.game.new_game(int(env), self._rngs[env])
+            self._new_game(int(env))
             self._returns[env] = 0.0
             self._lengths[env] = 0
         try:  # the game checks the actions, before it steps
@@ -192,6 +197,7 @@ class PinballVectorEnv(VectorEnv):
         truncated = np.zeros(self.num_envs, dtype=bool)
         if self.max_episode_steps is not None:  # as Gymnasium's TimeLimit: even if terminated
             truncated = (lengths >= self.max_episode_steps) & ~restart
+        truncated |= self.game.out_of_time() & ~restart
         ended = terminated | truncated
         obs, infos = self._observe(), self._infos()
         if ended.any():
@@ -219,6 +225,9 @@ class PinballVectorEnv(VectorEnv):
         self.game.world.threads.close()
 
     # --- helpers ------------------------------------------------------------------------------
+
+    def _new_game(self, env: int, options: Mapping[str, Any] | None = None) -> None:
+        self.game.new_game(env, self._rngs[env], options)
 
     def _observe(self) -> np.ndarray:
         if self._obs_renderer is None:
@@ -253,7 +262,7 @@ class PinballVectorEnv(VectorEnv):
         for env in np.flatnonzero(ended):
             final_obs[env] = obs[env].copy()
         for env in np.flatnonzero(ended):
-            self.game.new_game(int(env), self._rngs[env])
+            self._new_game(int(env))
         self._returns[ended] = 0.0
         self._lengths[ended] = 0
         obs, infos_after = self._observe(), self._infos()

@@ -1,20 +1,31 @@
-"""A batch of balls on one table: the kernel's arrays and the call into the world step.
+"""A batch of balls on a table: the kernel's arrays and the call into the world step.
 
 ``World`` owns the preallocated arrays the kernel writes in place (built by
 :func:`~pinball_env.physics.make_state` and :func:`~pinball_env.physics.make_scratch` from the
 packed table). The single env is a World of one; a vector env is a World of N calling the same
-kernel, :func:`~pinball_env.physics.step_world`. Physics backends swap :meth:`World._advance`.
+kernel, :func:`~pinball_env.physics.step_world`. :meth:`World.set_table` gives an env a table of
+its own (generated layouts): the World then steps every env on its own table in one call of
+:func:`~pinball_env.physics.step_tables`. Physics backends swap :meth:`World._advance`.
 """
 
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
+from numba.typed import List
 
 from pinball_env.parallel import EnvThreads
-from pinball_env.physics import CONTACT_CAPACITY, make_scratch, make_state, step_world
+from pinball_env.physics import (
+    CONTACT_CAPACITY,
+    element_count,
+    make_scratch,
+    make_state,
+    step_tables,
+    step_world,
+)
 from pinball_env.physics.columns import (
     BALL_VX,
     BALL_VY,
@@ -27,6 +38,8 @@ from pinball_env.physics.columns import (
 )
 from pinball_env.table import BUTTONS, Table
 
+# Tables whose packed arrays World.set_table keeps, to give them to an env again at no cost.
+MAX_PACKED = 1024
 # Fastest ball World.place_ball accepts [m/s]: far beyond any table (tables and resets allow
 # 100 m/s; the property tests fire balls at up to 1 km/s), well inside exact arithmetic.
 MAX_PLACE_SPEED = 1e4
@@ -43,11 +56,13 @@ class Contact:
 
 
 class World:
-    """``n_envs`` independent balls and flipper sets on the same table, stepped together.
+    """``n_envs`` independent balls and flipper sets, on the same table unless
+    :meth:`set_table` gives some env another, stepped together.
 
     Attributes:
-        table: the validated table.
-        geometry, settings: the table as the kernel sees it (``table.pack()``,
+        table: the validated table (env 0's, and every env's that :meth:`set_table` did not
+            change; :meth:`table_of` gives any env's).
+        geometry, settings: ``table`` as the kernel sees it (``table.pack()``,
             ``table.pack_settings()``).
         state: the kernel's per-env arrays (``physics.State``): balls, active, flipper angles
             and angular velocities, flipper commands, the contact log and the hit counts.
@@ -66,6 +81,14 @@ class World:
         self.scratch = make_scratch(self.geometry, self.settings, n_envs)
         # Column of the buttons array that drives each flipper.
         self._flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
+        # Per-env tables, once set_table has given an env its own: the tables, their packed
+        # arrays (typed lists, the kernel's) and points per element id (rows padded with 0).
+        self._tables: list[Table] | None = None
+        self._geometries: List | None = None
+        self._settings: List | None = None
+        self._scores: np.ndarray | None = None
+        self._packed: dict[int, tuple[Table, Any, Any]] = {}  # id -> (table, packed arrays)
+        self._same_geometries: List | None = None  # geometries() while every env has `table`
         for env in range(n_envs):
             self.rest_flippers(env)
             self.place_ball(env, table.ball.start, table.ball.velocity)
@@ -110,23 +133,99 @@ class World:
 
     def launch(self, env: int, speed: float) -> None:
         """Put env ``env``'s ball on the plunger and fire it up the shooter lane at ``speed``."""
-        plunger = self.table.plunger
-        if plunger is None:
-            raise ValueError(f"table {self.table.name!r} has no plunger")
-        self.place_ball(env, plunger.position, (0.0, speed))
+        table = self.table_of(env)
+        if table.plunger is None:
+            raise ValueError(f"table {table.name!r} has no plunger")
+        self.place_ball(env, table.plunger.position, (0.0, speed))
 
     def rest_flippers(self, env: int) -> None:
         """Put env ``env``'s flippers at rest against their lower stops, released."""
-        self.state.flipper_angle[env] = self.geometry.flippers[:, FLIPPER_REST_ANGLE]
+        geometry = self.geometry_of(env)
+        self.state.flipper_angle[env] = geometry.flippers[:, FLIPPER_REST_ANGLE]
         self.state.flipper_omega[env] = 0.0
         self.state.flipper_command[env] = False
 
-    def step(self, buttons: np.ndarray | None = None) -> None:
-        """Advance every env by one frame.
+    # --- a table per env ----------------------------------------------------------------------
+
+    def table_of(self, env: int) -> Table:
+        """The table env ``env`` plays."""
+        return self.table if self._tables is None else self._tables[env]
+
+    def geometry_of(self, env: int) -> Any:
+        """The packed table (``physics.Geometry``) env ``env`` plays."""
+        return self.geometry if self._geometries is None else self._geometries[env]
+
+    def geometries(self) -> List:
+        """Every env's packed table, a typed list (for compiled code that takes one per env)."""
+        if self._geometries is None:
+            if self._same_geometries is None:
+                self._same_geometries = List([self.geometry] * self.n_envs)
+            return self._same_geometries
+        return self._geometries
+
+    def set_table(self, env: int, table: Table) -> None:
+        """Make env ``env`` play ``table`` from now on: its flippers at rest, its ball at the
+        table's start. The table needs the flippers of the World's table, driven by the same
+        buttons (its other elements may differ in number and kind)."""
+        if table.flipper_buttons != self.table.flipper_buttons:
+            raise ValueError(
+                f"table {table.name!r} has flippers on buttons {table.flipper_buttons}, the "
+                f"world's tables on {self.table.flipper_buttons}: every env needs the same"
+            )
+        if self._tables is None:
+            self._tables = [self.table] * self.n_envs
+            self._scores = np.zeros(self.state.hits.shape, dtype=np.int64)
+            self._scores[:] = self.table.element_scores
+            self._pack_tables()
+        packed = self._packed.get(id(table))
+        if packed is None or packed[0] is not table:
+            if len(self._packed) >= MAX_PACKED:
+                self._packed.clear()
+            packed = self._packed[id(table)] = (table, table.pack(), table.pack_settings())
+        _, geometry, settings = packed
+        self._fit(element_count(geometry), geometry.sensors.shape[0], settings.max_passes)
+        self._tables[env] = table
+        self._geometries[env] = geometry
+        self._settings[env] = settings
+        self._scores[env] = 0
+        self._scores[env, : len(table.element_scores)] = table.element_scores
+        self.rest_flippers(env)
+        self.place_ball(env, table.ball.start, table.ball.velocity)
+
+    def _pack_tables(self) -> None:
+        """The kernel's typed lists of every env's packed table (each table packed once)."""
+        packed = {id(t): (t.pack(), t.pack_settings()) for t in self._tables}
+        self._geometries = List([packed[id(t)][0] for t in self._tables])
+        self._settings = List([packed[id(t)][1] for t in self._tables])
+        self._entry = None
+
+    def _fit(self, n_elements: int, n_sensors: int, max_passes: int) -> None:
+        """Widen the per-element rows of the state and scratch arrays (zero-padded) to hold a
+        table of ``n_elements`` elements, ``n_sensors`` sensors and ``max_passes`` passes. The
+        arrays are replaced, so holders of ``state`` must take the new one (``Game`` does)."""
+
+        def widen(array: np.ndarray, width: int) -> np.ndarray:
+            if array.shape[1] >= width:
+                return array
+            wider = np.zeros((array.shape[0], width), dtype=array.dtype)
+            wider[:, : array.shape[1]] = array
+            return wider
+
+        self.state = self.state._replace(hits=widen(self.state.hits, n_elements))
+        self.scratch = self.scratch._replace(
+            crossings=widen(self.scratch.crossings, n_sensors),
+            hit_elements=widen(self.scratch.hit_elements, max_passes),
+        )
+        self._scores = widen(self._scores, n_elements)
+
+    def step(self, buttons: np.ndarray | None = None, envs: np.ndarray | None = None) -> None:
+        """Advance every env (or those in ``envs``) by one frame.
 
         Args:
             buttons: (n_envs, len(BUTTONS)) bool, the flipper buttons (left, right) held during
                 the frame; None keeps the previous commands.
+            envs: (n_envs,) bool, the envs to advance; the others are left exactly as they are
+                (None: all).
         """
         if buttons is not None:
             pressed = np.asarray(buttons)
@@ -138,16 +237,27 @@ class World:
                 )
             if pressed.dtype != np.bool_ and not np.all((pressed == 0) | (pressed == 1)):
                 raise ValueError(f"buttons must be booleans or 0/1, got dtype {pressed.dtype}")
-            self.state.flipper_command[:] = pressed[:, self._flipper_buttons]
-        if self._advance():
+            commands = pressed[:, self._flipper_buttons]
+            if envs is None:
+                self.state.flipper_command[:] = commands
+            else:
+                self.state.flipper_command[envs] = commands[envs]
+        if self._advance(envs):
             bad = np.flatnonzero(~np.isfinite(self.state.balls).all(axis=1)).tolist()
             raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
 
-    def _advance(self) -> int:
-        """One frame of physics on the state arrays: the swept-collision kernel. Returns the
-        number of envs whose ball state is no longer finite."""
-        args = (self.geometry, self.settings, self.state, self.scratch)
+    def _advance(self, envs: np.ndarray | None = None) -> int:
+        """One frame of physics on the state arrays of ``envs`` (a bool mask; None: all): the
+        swept-collision kernel. Returns the number of envs whose ball state is no longer
+        finite."""
+        if self._geometries is None:
+            args = (self.geometry, self.settings, self.state, self.scratch)
+        else:
+            args = (self._geometries, self._settings, self.state, self.scratch)
         kernel = self._kernel(args)
+        if envs is not None:  # a call per run of neighbouring envs (each costs about 1 us)
+            edges = np.flatnonzero(np.diff(np.concatenate([[False], envs, [False]])))
+            return sum(kernel(*args, start, stop) for start, stop in edges.reshape(-1, 2))
         if self.threads.num_threads == 1:
             return kernel(*args, 0, self.n_envs)
         return sum(self.threads.run(kernel, self.n_envs, *args))
@@ -157,10 +267,11 @@ class World:
         dispatch, which infers the types of the 26 arrays on every call (about 3.5 us, as long
         as the kernel takes for a ball)."""
         if self._entry is None:
-            step_world(*args, 0, 0)  # compiles (or loads) the kernel for these types; no env
-            overloads = getattr(step_world, "overloads", None)  # None: NUMBA_DISABLE_JIT
+            step = step_world if self._geometries is None else step_tables
+            step(*args, 0, 0)  # compiles (or loads) the kernel for these types; no env
+            overloads = getattr(step, "overloads", None)  # None: NUMBA_DISABLE_JIT
             if overloads is None:
-                self._entry = step_world
+                self._entry = step
             else:
                 signature = tuple(numba.typeof(a) for a in (*args, 0, 0))
                 self._entry = overloads[signature].entry_point
@@ -169,16 +280,24 @@ class World:
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
+        state["_geometries"] = state["_settings"] = state["_same_geometries"] = None  # nor lists
         return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        if self._tables is not None:  # a copy packs its tables again
+            self._pack_tables()
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""
+        if self._scores is not None:
+            return (self.state.hits * self._scores).sum(axis=1)
         return self.state.hits @ self.table.element_scores
 
     def frame_contacts(self, env: int = 0) -> list[Contact]:
         """The logged contacts and sensor crossings of env ``env`` in the last frame."""
         count = min(int(self.state.contact_count[env]), CONTACT_CAPACITY)
-        names = self.table.element_names
+        names = self.table_of(env).element_names
         return [
             Contact(
                 element=int(row[CONTACT_ELEMENT]),

@@ -5,7 +5,7 @@ import copy
 import numpy as np
 import pytest
 
-from pinball_env.game import DISCRETE_BUTTONS, Game, discrete_action
+from pinball_env.game import DISCRETE_BUTTONS, MAX_SKIP_FRAMES, Game, discrete_action
 from pinball_env.table import BUTTONS, load_table
 
 CLASSIC = load_table("classic")
@@ -146,6 +146,62 @@ def test_a_step_of_k_frames_is_k_frames_with_the_action_held():
     assert games_over > 0  # games ended inside a step
 
 
+def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
+    # A game with skip_above is, frame by frame, the game that holds the action for the step's
+    # frames, then releases the buttons while the ball is above the line (at most
+    # MAX_SKIP_FRAMES frames); it is asked again only with the ball low, or after that many.
+    n, k, line = len(SEEDS), 2, 0.3
+    skipping = Game(CLASSIC, n_envs=n, frame_skip=k, skip_above=line, drain_penalty=1.0)
+    framing = Game(CLASSIC, n_envs=n, drain_penalty=1.0)
+    rngs = {game: [np.random.default_rng(seed) for seed in SEEDS] for game in (skipping, framing)}
+    for game in (skipping, framing):
+        for env in range(n):
+            game.new_game(env, rngs[game][env])
+    high_asks = lengths = 0
+    for step_actions in random_actions("discrete", n, 500, seed=3):
+        reward, over = skipping.step(step_actions, rngs[skipping])
+        total = np.zeros(n)
+        ended = np.zeros(n, dtype=bool)
+        frames = np.zeros(n, dtype=np.int64)
+        for frame in range(k + MAX_SKIP_FRAMES):
+            high = framing.world.balls[:, 1] > line * CLASSIC.height
+            going = ~ended & ((frame < k) | (high & framing.world.active))
+            if not going.any():
+                break
+            actions = np.where(frame < k, step_actions, 0)
+            frame_reward, frame_over = framing.step(actions, rngs[framing], ~going)
+            total += frame_reward
+            frames += going
+            ended |= frame_over
+        assert reward.tobytes() == total.tobytes()
+        assert skipping.observe().tobytes() == framing.observe().tobytes()
+        assert (skipping.state.frames == framing.state.frames).all()
+        high = skipping.world.balls[:, 1] > line * CLASSIC.height
+        asked_high = high & skipping.world.active & ~over
+        assert (frames[asked_high] == k + MAX_SKIP_FRAMES).all()  # only after the most
+        high_asks += int(asked_high.sum())
+        lengths += int(frames.sum())
+        for env in np.flatnonzero(over):
+            for game in (skipping, framing):
+                game.new_game(env, rngs[game][env])
+    assert lengths > 3 * k * 500 * n  # steps ran on for many frames
+    assert 0 < high_asks < 0.1 * 500 * n
+
+
+def test_a_game_runs_out_of_time_at_max_frames_exactly():
+    for frame_skip, skip_above in ((1, 0.0), (3, 0.0), (2, 0.4)):
+        game = Game(CLASSIC, n_envs=2, frame_skip=frame_skip, skip_above=skip_above,
+                    max_frames=500)  # fmt: skip
+        rngs = [np.random.default_rng(s) for s in (0, 1)]
+        for env in range(2):
+            game.new_game(env, rngs[env])
+        while not game.out_of_time().all():
+            assert not game.out_of_time().any() or (game.state.frames == 500).any()
+            game.step(np.array([1, 2]), rngs)
+        assert (game.state.frames == 500).all()
+        assert game.infos()["frames"].tolist() == [500, 500]
+
+
 def test_a_drained_ball_costs_the_drain_penalty():
     game = Game(CLASSIC, n_envs=1, drain_penalty=1.5, reward_scale=0.0)
     rng = np.random.default_rng(0)
@@ -167,6 +223,10 @@ def test_a_drained_ball_costs_the_drain_penalty():
         ({"frame_skip": 0}, "frame_skip must be an integer from 1 to 60"),
         ({"frame_skip": 2.5}, "frame_skip must be an integer from 1 to 60"),
         ({"drain_penalty": float("nan")}, "drain_penalty must be a finite number"),
+        ({"skip_above": 1.0}, r"skip_above must be a number in \[0, 1\)"),
+        ({"skip_above": -0.1}, r"skip_above must be a number in \[0, 1\)"),
+        ({"max_frames": 0}, "max_frames must be None or an integer >= 1"),
+        ({"max_frames": 10.0}, "max_frames must be None or an integer >= 1"),
     ],
 )
 def test_bad_step_options_are_rejected(kwargs, message):

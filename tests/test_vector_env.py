@@ -8,7 +8,7 @@ from gymnasium.vector import AutoresetMode
 import pinball_env  # noqa: F401  (registers Pinball-v0)
 from pinball_env.vector_env import PinballVectorEnv
 
-INFO_KEYS = ("ball_position", "ball_velocity", "score", "balls_left", "points", "drained")
+INFO_KEYS = ("ball_position", "ball_velocity", "score", "balls_left", "points", "drained", "frames")
 
 
 def random_actions(space: gym.Space, steps: int, seed: int) -> list:
@@ -24,6 +24,13 @@ def random_actions(space: gym.Space, steps: int, seed: int) -> list:
         {"obs_type": "grayscale", "image_size": 48, "balls": 1, "max_episode_steps": 200},
         {"obs_type": "rgb", "image_size": (40, 24), "max_episode_steps": 150},
         {"frame_skip": 3, "drain_penalty": 1.0, "balls": 2, "max_episode_steps": 300},
+        {
+            "frame_skip": 2,
+            "skip_above": 0.3,
+            "balls": 1,
+            "max_frames": 1500,
+            "max_episode_steps": None,
+        },
     ],
 )
 def test_vector_env_is_bitwise_n_single_envs(kwargs):

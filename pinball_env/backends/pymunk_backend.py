@@ -73,9 +73,10 @@ class PymunkWorld(World):
         super().__init__(table, n_envs)
         self._spaces = [_EnvSpace(self, env) for env in range(n_envs)]
 
-    def _advance(self) -> int:
-        for env_space in self._spaces:
-            env_space.advance_frame()
+    def _advance(self, envs: np.ndarray | None = None) -> int:
+        for env, env_space in enumerate(self._spaces):
+            if envs is None or envs[env]:
+                env_space.advance_frame()
         return int((~np.isfinite(self.state.balls).all(axis=1)).sum())
 
     def __getstate__(self) -> dict[str, Any]:

@@ -35,7 +35,7 @@ from pinball_env.physics.flipper import (
     sweep_capsule,
     sweep_flipper,
 )
-from pinball_env.physics.step import deepest_overlap, respond, step_world
+from pinball_env.physics.step import deepest_overlap, respond, step_tables, step_world
 from pinball_env.physics.sweep import (
     point_segment_distance,
     sweep_circle,
@@ -67,6 +67,7 @@ __all__ = [
     "point_segment_distance",
     "respond",
     "segment_bounds",
+    "step_tables",
     "step_world",
     "sweep_capsule",
     "sweep_circle",

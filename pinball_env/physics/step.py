@@ -400,7 +400,7 @@ def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossi
     happen. Returns the fraction of the move at the drain crossing (inf for none)."""
     drain = cross_sensors(x, y, dx, dy, geometry.sensors, geometry.sensor_drain, crossings)
     offset = first_sensor(geometry)
-    for j in range(crossings.shape[0]):
+    for j in range(geometry.sensors.shape[0]):  # the row may be longer (see step_tables)
         if crossings[j] <= drain and crossings[j] < INF:
             state.hits[env, offset + j] += 1
             log_contact(state, env, offset + j, start + duration * crossings[j], 0.0)
@@ -687,5 +687,21 @@ def step_world(geometry, settings, state, scratch, start, stop):
     faults = 0
     for env in range(start, stop):
         if not step_ball(geometry, settings, state, scratch, env, flipper_id):
+            faults += 1
+    return faults
+
+
+@njit(cache=True, nogil=True)
+def step_tables(geometries, settings, state, scratch, start, stop):
+    """:func:`step_world` for envs that each play their own table: env ``i`` on
+    ``geometries[i]`` with ``settings[i]`` (typed lists, one entry per env). Every table has
+    as many flippers; the per-element rows of ``state`` and ``scratch`` (hits, sensor
+    crossings, a substep's hits) are as long as the largest table needs, and each env uses the
+    start of its rows. The physics of an env is bitwise that of :func:`step_world` on its
+    table."""
+    faults = 0
+    for env in range(start, stop):
+        geometry = geometries[env]
+        if not step_ball(geometry, settings[env], state, scratch, env, first_flipper(geometry)):
             faults += 1
     return faults

@@ -56,7 +56,8 @@ def available_tables() -> list[str]:
 
 
 def load_table(name_or_path: str | os.PathLike[str]) -> Table:
-    """Load a table from a .yaml/.yml path, or a built-in one by bare name (``"classic"``)."""
+    """Load a table from a .yaml/.yml path, or a built-in one by bare name (``"classic"``).
+    (``pinball_env.procgen.load_any_table`` also takes generated tables' names.)"""
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise TypeError(f"a table is a name or a path, got {type(name_or_path).__name__}")
     path = Path(name_or_path)

@@ -7,6 +7,8 @@ Measures, with uniformly random actions on the classic table (state observations
 - Gymnasium's ``SyncVectorEnv`` of 8 of each;
 - the native vector env (``gym.make_vec``) at N = 1, 64, 1024 and 4096 envs with 1 and 2
   threads, and at N = 256 with 84x84 grayscale observations;
+- ``PinballProcgen-v0``'s native vector env at N = 1024 with 2 threads, each env on its own
+  generated table (16 layouts, generated before the timing), with 16 rays in the observation;
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
   references of this machine;
 - the kernel alone: microseconds per ball-frame and nanoseconds per ball-element sweep test;
@@ -50,6 +52,7 @@ RATIOS = (
     ("native1024_2thread", "sync8_swept"),
     ("native1024_2thread", "native1024_1thread"),
     ("native1024_2thread", "cartpole_vec1024"),
+    ("procgen1024_16layouts_2thread", "native1024_2thread"),
     ("single_swept", "cartpole_single"),
     ("single_swept", "single_pymunk"),
 )
@@ -157,7 +160,14 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
             figures.append((f"native{n}_{threads}thread", lambda n=n, t=threads: native(n, t)))
     cartpole = gym.make("CartPole-v1")
     cartpoles = gym.make_vec("CartPole-v1", num_envs=1024)
+
+    def procgen(n: int, threads: int) -> float:
+        env = gym.make_vec("PinballProcgen-v0", num_envs=n, num_threads=threads, num_layouts=16,
+                           rays=16)  # fmt: skip
+        return steps_per_second(env, steps(max(300, 300_000 // max(n, 100))), seed)
+
     figures += [
+        ("procgen1024_16layouts_2thread", lambda: procgen(1024, 2)),
         ("native256_grayscale_2thread", lambda: native(256, 2, "grayscale")),
         ("cartpole_single", lambda: steps_per_second(cartpole, steps(20000), seed)),
         ("cartpole_vec1024", lambda: steps_per_second(cartpoles, steps(1000), seed)),

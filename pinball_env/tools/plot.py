@@ -4,6 +4,8 @@ Examples::
 
     python -m pinball_env.tools.plot box --out outputs/box.png
     python -m pinball_env.tools.plot box --trace 600 --velocity 2.5 1.0 --out outputs/trace.png
+    python -m pinball_env.tools.plot procgen:7 --out outputs/procgen7.png
+    python -m pinball_env.tools.plot --gallery --difficulty hard --seeds 0 12 --out gallery.png
 
 Needs matplotlib (``pip install -e ".[plot]"``).
 """
@@ -15,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from pinball_env.physics import capsule_face_normal
-from pinball_env.table import Flipper, Table, load_table
+from pinball_env.procgen import DIFFICULTIES, generate_table, load_any_table
+from pinball_env.table import Flipper, Table
 from pinball_env.world import World
 
 WALL_COLOUR = "#1d3557"
@@ -55,7 +58,7 @@ def _pyplot():
     return plt
 
 
-def draw_table(ax, table: Table) -> None:
+def draw_table(ax, table: Table, labels: bool = True) -> None:
     """Draw walls (one-sided ones with an arrow on their blocking side, kickers in red), posts,
     flippers (at rest, and faintly raised), sensors (dashed) and the ball start."""
     from matplotlib.patches import Circle, Polygon
@@ -92,11 +95,16 @@ def draw_table(ax, table: Table) -> None:
     ax.set_xlim(0, table.width)
     ax.set_ylim(0, table.height)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m] (up the table)")
-    ax.set_title(
-        f"{table.name}: {table.width:g} m x {table.height:g} m, slope {table.slope_deg:g} deg"
-    )
+    if labels:
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m] (up the table)")
+        ax.set_title(
+            f"{table.name}: {table.width:g} m x {table.height:g} m, slope {table.slope_deg:g} deg"
+        )
+    else:
+        ax.set_axis_off()
+        ax.set_title(f"{table.name}\n{table.width:.2f} x {table.height:.2f} m, "
+                     f"{table.slope_deg:.1f} deg", fontsize=8)  # fmt: skip
 
 
 def draw_path(ax, path: np.ndarray, frame_rate: float) -> None:
@@ -129,6 +137,30 @@ def plot_table(
     return out
 
 
+def plot_gallery(tables: list[Table], out: Path, columns: int = 6) -> Path:
+    """Write a PNG of ``tables`` side by side, ``columns`` to a row, all drawn to one scale."""
+    plt = _pyplot()
+    rows = math.ceil(len(tables) / columns)
+    width = max(t.width for t in tables)
+    height = max(t.height for t in tables)
+    size = 2.0  # inches per table's width
+    fig, axes = plt.subplots(
+        rows, columns, figsize=(size * columns, size * rows * height / width + 0.4 * rows),
+        squeeze=False,
+    )  # fmt: skip
+    for ax in axes.flat:
+        ax.set_axis_off()
+    for ax, table in zip(axes.flat, tables, strict=False):
+        draw_table(ax, table, labels=False)
+        ax.set_xlim(0, width)
+        ax.set_ylim(0, height)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
 def main(argv: list[str] | None = None) -> Path:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("table", nargs="?", default="box", help="table name or YAML path")
@@ -139,9 +171,27 @@ def main(argv: list[str] | None = None) -> Path:
     parser.add_argument(
         "--velocity", type=float, nargs=2, metavar=("VX", "VY"), help="launch velocity [m/s]"
     )
+    parser.add_argument(
+        "--gallery", action="store_true", help="draw a grid of generated tables instead"
+    )
+    parser.add_argument(
+        "--difficulty", choices=DIFFICULTIES, default="easy", help="of the gallery's tables"
+    )
+    parser.add_argument(
+        "--seeds", type=int, nargs=2, default=(0, 12), metavar=("FIRST", "COUNT"),
+        help="the gallery's tables: COUNT seeds from FIRST (default: 0 12)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
+    if args.gallery:
+        first, count = args.seeds
+        if first < 0 or count < 1:
+            parser.error(f"--seeds needs FIRST >= 0 and COUNT >= 1, got {first} {count}")
+        tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
+        out = plot_gallery(tables, args.out, columns=min(count, 6))
+        print(f"wrote {out}")
+        return out
     velocity = tuple(args.velocity) if args.velocity else None
-    out = plot_table(load_table(args.table), args.out, args.trace, velocity)
+    out = plot_table(load_any_table(args.table), args.out, args.trace, velocity)
     print(f"wrote {out}")
     return out
 

@@ -1,0 +1,208 @@
+"""The generalization benchmark: one PPO config trained on 1, 16, 256 and unlimited layouts of
+``PinballProcgen-v0``, each tested on held-out layouts.
+
+    python -m agents.generalization --config configs/agents/procgen_ppo.yaml [key=value ...]
+        [--layouts 1 16 256 0] [--minutes 5] [--test-layouts 100] [--out DIR]
+
+For each number of training layouts N (0: unlimited), the config is trained with
+``num_layouts=N, start_layout=0`` for ``--minutes`` of wall time, then plays one game on each
+of:
+
+- **test**: ``--test-layouts`` layouts from ``TEST_START`` on, a range no training draw reaches;
+- **train**: as many games on its own training layouts (layout ``i mod N``; ``i`` when unlimited).
+
+The random and heuristic baselines play the very same games (layout and seed). A score is
+normalised by the baselines on the same games, heuristic = 1 and random = 0:
+``(model - random) / (heuristic - random)`` over the mean scores of the set, so that each layout
+weighs as its games do (the ratio of single games would explode on a layout where the two
+baselines happen to score alike). Its 95% confidence interval is a bootstrap over the layouts,
+resampling the games of all three together. Written to ``--out`` (default
+``runs/generalization_TIME``): ``generalization.json``, ``generalization.csv`` and
+``generalization.png`` (train and test score against the number of training layouts), and a
+run folder per N.
+"""
+
+import argparse
+import csv
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.common import BASELINES, baseline_policy, make_env, stats_for
+from agents.config import ConfigError, TrainConfig, algorithm_class, config_from_dict, load_config
+from agents.evaluate import baseline_config, model_policy, rollouts
+from agents.train import set_threads, start, train
+
+PROCGEN_ID = "PinballProcgen-v0"
+LAYOUT_COUNTS = (1, 16, 256, 0)
+# The first held-out layout: far beyond any training draw (unlimited draws [0, 2**31)).
+TEST_START = 10**12
+BOOTSTRAP_SAMPLES = 2000
+
+
+def with_layouts(config: TrainConfig, count: int, minutes: float) -> TrainConfig:
+    """``config`` training on layouts ``[0, count)`` (0: unlimited) for ``minutes``."""
+    data = config.to_dict()
+    data["env"]["kwargs"] = {**data["env"]["kwargs"], "num_layouts": count, "start_layout": 0}
+    data["max_minutes"] = minutes
+    return config_from_dict(data, f"<{config.env.id}, {count or 'unlimited'} layouts>")
+
+
+def play(config: TrainConfig, who: str, layouts: list[int], run: Path | None = None) -> np.ndarray:
+    """Scores of one game per layout (env seeds ``eval_seed + i``), played by ``who``: a
+    baseline's name, or ``"model"`` (the run's)."""
+    seeds = [config.eval_seed + i for i in range(len(layouts))]
+    if who == "model":
+        model_path = run / "model.zip"
+        model = algorithm_class(config.algo).load(model_path, device=config.device)
+        venv = make_env(config, num_envs=len(layouts), seed=seeds[0], stats=stats_for(model_path))
+        act = model_policy(model)
+    else:
+        base = baseline_config(who, config)
+        venv = make_env(base, num_envs=len(layouts), seed=seeds[0])
+        act = baseline_policy(who, venv, seeds[0])
+    rows = rollouts(venv, act, seeds, layouts)
+    venv.close()
+    assert [row["layout"] for row in rows] == list(layouts)
+    return np.array([row["score"] for row in rows], dtype=np.float64)
+
+
+def normalised(model: np.ndarray, random: np.ndarray, heuristic: np.ndarray, seed: int = 0):
+    """``(model - random) / (heuristic - random)`` over the set's means, and its bootstrap 95%
+    interval over the games (the three scores of a game resampled together)."""
+
+    def ratio(index: np.ndarray) -> float:
+        gap = heuristic[index].mean() - random[index].mean()
+        return float((model[index].mean() - random[index].mean()) / gap) if gap else float("nan")
+
+    rng = np.random.default_rng(seed)
+    n = len(model)
+    samples = np.array([ratio(rng.integers(0, n, n)) for _ in range(BOOTSTRAP_SAMPLES)])
+    low, high = np.nanpercentile(samples, [2.5, 97.5])
+    return ratio(np.arange(n)), [float(low), float(high)]
+
+
+def benchmark(
+    config: TrainConfig, counts: tuple[int, ...], minutes: float, n_test: int, out: Path
+) -> list[dict[str, Any]]:
+    """Train and test per number of layouts; write the results into ``out``."""
+    if config.env.id != PROCGEN_ID:
+        raise ConfigError(f"env.id: the benchmark trains on {PROCGEN_ID}, got {config.env.id!r}")
+    set_threads(config)
+    out.mkdir(parents=True, exist_ok=True)
+    test_layouts = list(range(TEST_START, TEST_START + n_test))
+    test_config = config_from_dict(
+        {**config.to_dict(), "env": {**config.to_dict()["env"], "kwargs": {
+            **config.env.kwargs, "num_layouts": n_test, "start_layout": TEST_START}}},
+        "<test layouts>",
+    )  # fmt: skip
+    test_baselines = {who: play(test_config, who, test_layouts) for who in BASELINES}
+    results = []
+    for count in counts:
+        trained = with_layouts(config, count, minutes)
+        run = start(trained, out / f"layouts_{count}", ["agents.generalization", f"{count}"])
+        started = time.monotonic()
+        train(trained, run, progress_bar=False)
+        seconds = time.monotonic() - started
+        train_layouts = [i % count if count else i for i in range(n_test)]
+        sets = {
+            "test": (test_config, test_layouts, test_baselines),
+            "train": (trained, train_layouts, None),
+        }
+        row: dict[str, Any] = {"layouts": count, "run": run.name, "train_seconds": seconds}
+        for name, (env_config, layouts, baselines) in sets.items():
+            scores = baselines or {who: play(env_config, who, layouts) for who in BASELINES}
+            model = play(env_config, "model", layouts, run)
+            score, interval = normalised(model, scores["random"], scores["heuristic"])
+            row[name] = {
+                "normalised": score, "ci95": interval, "model": float(model.mean()),
+                "random": float(scores["random"].mean()),
+                "heuristic": float(scores["heuristic"].mean()),
+            }  # fmt: skip
+        results.append(row)
+        print(
+            f"{count or 'unlimited'} layouts: test {row['test']['normalised']:.2f} "
+            f"{_interval(row['test']['ci95'])}, train {row['train']['normalised']:.2f} "
+            f"{_interval(row['train']['ci95'])} ({seconds / 60:.1f} min of training)"
+        )
+        write(results, out, config, minutes, n_test)
+    return results
+
+
+def _interval(interval: list[float]) -> str:
+    return f"({interval[0]:.2f} to {interval[1]:.2f})"
+
+
+def write(results: list[dict], out: Path, config: TrainConfig, minutes: float, n: int) -> None:
+    summary = {"config": config.to_dict(), "minutes_per_run": minutes, "test_layouts": n,
+               "test_start": TEST_START, "results": results}  # fmt: skip
+    (out / "generalization.json").write_text(json.dumps(summary, indent=1))
+    with open(out / "generalization.csv", "w", newline="") as file:
+        writer = csv.writer(file)
+        writer.writerow(["layouts", "set", "normalised", "ci_low", "ci_high", "model",
+                         "random", "heuristic"])  # fmt: skip
+        for row in results:
+            for name in ("train", "test"):
+                r = row[name]
+                writer.writerow([row["layouts"] or "unlimited", name, r["normalised"],
+                                 *r["ci95"], r["model"], r["random"], r["heuristic"]])  # fmt: skip
+    plot(results, out / "generalization.png", minutes)
+
+
+def plot(results: list[dict], path: Path, minutes: float) -> None:
+    """Train and test normalised score (with 95% intervals) against the training layouts."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    labels = [str(row["layouts"] or "unlimited") for row in results]
+    x = np.arange(len(results))
+    fig, ax = plt.subplots(figsize=(6, 3.6), dpi=100)
+    for offset, name, marker in ((-0.06, "train", "o"), (0.06, "test", "s")):
+        y = np.array([row[name]["normalised"] for row in results])
+        low, high = np.array([row[name]["ci95"] for row in results]).T
+        ax.errorbar(x + offset, y, yerr=[y - low, high - y], marker=marker, capsize=4,
+                    label=f"{name} layouts")  # fmt: skip
+    ax.axhline(1.0, color="grey", linestyle="--", label="heuristic")
+    ax.axhline(0.0, color="grey", linestyle=":", label="random")
+    ax.set_xticks(x, labels)
+    ax.set_xlabel("training layouts")
+    ax.set_ylabel("score, normalised (random 0, heuristic 1)")
+    ax.set_title(f"PPO on PinballProcgen-v0, {minutes:g} min of training each")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--config", type=Path, required=True, help="a PinballProcgen-v0 config")
+    parser.add_argument("overrides", nargs="*", help="key=value settings over the config")
+    parser.add_argument("--layouts", type=int, nargs="+", default=list(LAYOUT_COUNTS),
+                        help="numbers of training layouts (0: unlimited)")  # fmt: skip
+    parser.add_argument("--minutes", type=float, default=5.0, help="training time per count")
+    parser.add_argument("--test-layouts", type=int, default=100, help="held-out layouts")
+    parser.add_argument("--out", type=Path, help="output folder")
+    args = parser.parse_args(argv)
+    try:
+        if any(count < 0 for count in args.layouts):
+            raise ConfigError(f"--layouts must be >= 0 (0: unlimited), got {args.layouts}")
+        if args.minutes <= 0 or args.test_layouts < 2:
+            raise ConfigError("--minutes must be > 0 and --test-layouts >= 2")
+        config = load_config(args.config, args.overrides)
+        out = args.out or Path("runs") / f"generalization_{time.strftime('%Y%m%d-%H%M%S')}"
+        results = benchmark(config, tuple(args.layouts), args.minutes, args.test_layouts, out)
+    except ConfigError as error:
+        parser.exit(2, f"error: {error}\n")
+    print(f"wrote {out / 'generalization.json'} and {out / 'generalization.png'}")
+    return results
+
+
+if __name__ == "__main__":
+    main()

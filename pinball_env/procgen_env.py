@@ -1,0 +1,392 @@
+"""``PinballProcgen-v0``: every game on a table generated from a seed, as Procgen's levels.
+
+The single env (:class:`PinballProcgenEnv`) and the native vector env
+(:class:`PinballProcgenVectorEnv`, each env on its own table, all stepped in one kernel call) are
+the Pinball-v0 envs with a layout drawn at every reset and observations that keep their meaning
+from one table to the next.
+"""
+
+import functools
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numba import njit
+
+from pinball_env.env import PinballEnv, obs_renderer
+from pinball_env.game import check_choice
+from pinball_env.physics.columns import (
+    BALL_X,
+    BALL_Y,
+    FLIPPER_BASE_RADIUS,
+    FLIPPER_LENGTH,
+    FLIPPER_PIVOT_X,
+    FLIPPER_PIVOT_Y,
+    FLIPPER_TIP_RADIUS,
+)
+from pinball_env.procgen import DIFFICULTIES, MAX_SEED, generate_table
+from pinball_env.render import Renderer
+from pinball_env.table import Table
+from pinball_env.vector_env import PinballVectorEnv
+
+# Seeds an unlimited env (num_layouts=0) draws from: [start_layout, start_layout + this).
+UNLIMITED_LAYOUTS = 2**31
+# Generated tables kept in memory (a table is about 50 KB; generating one takes 0.1-0.2 s).
+CACHED_TABLES = 512
+# Rays see this far [m]; a ray that meets nothing reads 1.
+RAY_RANGE = 0.5
+MAX_RAYS = 64
+
+
+@functools.lru_cache(maxsize=CACHED_TABLES)
+def layout_table(seed: int, difficulty: str) -> Table:
+    """The generated table of a layout (``generate_table``, cached)."""
+    return generate_table(seed, difficulty)
+
+
+class Layouts:
+    """The layouts an env plays: seeds ``[start, start + count)``, ``count`` 0 for unlimited."""
+
+    def __init__(self, count: int, start: int, difficulty: str) -> None:
+        for name, value in (("num_layouts", count), ("start_layout", start)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise ValueError(f"{name} must be an integer >= 0, got {value!r}")
+        check_choice("difficulty", difficulty, DIFFICULTIES)
+        self.count = int(count)
+        self.start = int(start)
+        self.difficulty = difficulty
+        if self.start + (self.count or UNLIMITED_LAYOUTS) - 1 > MAX_SEED:
+            raise ValueError(f"layouts beyond seed {MAX_SEED}: lower start_layout")
+
+    def draw(self, rng: np.random.Generator) -> int:
+        """A layout drawn uniformly from the env's."""
+        return self.start + int(rng.integers(self.count or UNLIMITED_LAYOUTS))
+
+    def check(self, layout: object) -> int:
+        """``layout`` (a reset option) if it is one of the env's; a ValueError if not."""
+        end = self.start + (self.count or UNLIMITED_LAYOUTS)
+        valid = isinstance(layout, (int, np.integer)) and not isinstance(layout, bool)
+        if not valid or not self.start <= layout < end:
+            raise ValueError(f"layout must be an integer in [{self.start}, {end}), got {layout!r}")
+        return int(layout)
+
+    def table(self, layout: int) -> Table:
+        return layout_table(layout, self.difficulty)
+
+
+def state_space(game: Any, rays: int) -> spaces.Box:
+    """The normalised state observation's space, with ``rays`` ray distances after it."""
+    low, high = game.observation_bounds(normalised=True)
+    low = np.concatenate([low, np.zeros(rays, dtype=np.float32)])
+    high = np.concatenate([high, np.ones(rays, dtype=np.float32)])
+    return spaces.Box(low, high, dtype=np.float32)
+
+
+def check_rays(rays: object) -> int:
+    if isinstance(rays, bool) or not isinstance(rays, (int, np.integer)):
+        raise ValueError(f"rays must be an integer, got {rays!r}")
+    if not 0 <= rays <= MAX_RAYS:
+        raise ValueError(f"rays must be in [0, {MAX_RAYS}], got {rays}")
+    return int(rays)
+
+
+@njit(cache=True)
+def cast_rays(x, y, n_rays, geometry, flipper_angles, out):
+    """Distances from (x, y) along ``n_rays`` directions (0 = +x, evenly round the circle) to
+    the first wall, post or flipper (its capsule: base and tip circles and the two sides),
+    in RAY_RANGE (1: nothing within it), written to ``out``."""
+    segments, circles, flippers = geometry.segments, geometry.circles, geometry.flippers
+    for k in range(n_rays):
+        a = 2.0 * math.pi * k / n_rays
+        dx, dy = math.cos(a), math.sin(a)
+        best = RAY_RANGE
+        for j in range(segments.shape[0]):
+            x0, y0, x1, y1 = segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3]
+            best = min(best, _ray_segment(x, y, dx, dy, x0, y0, x1, y1))
+        for j in range(circles.shape[0]):
+            best = min(best, _ray_circle(x, y, dx, dy, circles[j, 0], circles[j, 1],
+                                         circles[j, 2]))  # fmt: skip
+        for j in range(flippers.shape[0]):
+            px, py = flippers[j, FLIPPER_PIVOT_X], flippers[j, FLIPPER_PIVOT_Y]
+            length = flippers[j, FLIPPER_LENGTH]
+            rb, rt = flippers[j, FLIPPER_BASE_RADIUS], flippers[j, FLIPPER_TIP_RADIUS]
+            ux, uy = math.cos(flipper_angles[j]), math.sin(flipper_angles[j])
+            tx, ty = px + length * ux, py + length * uy
+            best = min(best, _ray_circle(x, y, dx, dy, px, py, rb))
+            best = min(best, _ray_circle(x, y, dx, dy, tx, ty, rt))
+            for side in (-1.0, 1.0):  # the sides, as lines between the circles' edges
+                nx, ny = -side * uy, side * ux
+                side_hit = _ray_segment(
+                    x, y, dx, dy, px + nx * rb, py + ny * rb, tx + nx * rt, ty + ny * rt
+                )
+                best = min(best, side_hit)
+        out[k] = best / RAY_RANGE
+
+
+@njit(cache=True, inline="always")
+def _ray_segment(x, y, dx, dy, x0, y0, x1, y1):
+    """Distance along the ray (x, y) + t (dx, dy), unit direction, to the segment (inf: none)."""
+    ex, ey = x1 - x0, y1 - y0
+    denominator = dx * ey - dy * ex
+    if denominator == 0.0:
+        return math.inf
+    t = ((x0 - x) * ey - (y0 - y) * ex) / denominator
+    s = ((x0 - x) * dy - (y0 - y) * dx) / denominator
+    return t if t >= 0.0 and 0.0 <= s <= 1.0 else math.inf
+
+
+@njit(cache=True, inline="always")
+def _ray_circle(x, y, dx, dy, cx, cy, r):
+    """Distance along the ray to the circle (0 from inside it, inf: none)."""
+    fx, fy = x - cx, y - cy
+    c = fx * fx + fy * fy - r * r
+    if c <= 0.0:
+        return 0.0
+    b = fx * dx + fy * dy
+    disc = b * b - c
+    if b > 0.0 or disc < 0.0:
+        return math.inf
+    return -b - math.sqrt(disc)
+
+
+class PinballProcgenEnv(PinballEnv):
+    """``Pinball-v0`` on generated tables: each reset draws a layout, a table generated from a
+    seed (``pinball_env.procgen.generate_table``), so an agent can be trained on some layouts
+    and tested on others, as in Procgen.
+
+    ## Layouts
+
+    Layouts are the seeds ``[start_layout, start_layout + num_layouts)`` (``num_layouts=0``:
+    unlimited, ``[start_layout, start_layout + 2**31)``); each reset draws one uniformly with
+    the env's random generator (``reset(seed=...)`` fixes the sequence), or plays the one given
+    as ``reset(options={"layout": seed})``. ``difficulty``: ``"easy"`` or ``"hard"`` tables.
+    ``info["layout"]`` is the layout of the game.
+
+    ## Observation Space
+
+    ``obs_type="state"``: the state of ``Pinball-v0`` normalised to the table, so that it means
+    the same on every layout: ball x and y in table widths and heights (0-1), vx and vy [m/s]
+    (clipped to +-20), each flipper's angle above rest in swings (0-1) and angular velocity in
+    top speeds (-1..1), ball in play, balls left. With ``rays=K``, K more entries: the
+    distances from the ball's centre to the first wall, post or flipper along K directions
+    evenly round the circle (the first along +x, counter-clockwise), in 0.5 m (1: nothing
+    that near), so that a state policy can see the layout. ``"rgb"`` and ``"grayscale"``: the
+    pictures of ``Pinball-v0``, of each game's own table.
+
+    ## Arguments
+
+    ```python
+    gym.make("PinballProcgen-v0", num_layouts=0, start_layout=0, difficulty="easy", rays=0,
+             obs_type="state", action_type="discrete", balls=3, reward_scale=0.01,
+             height_shaping=0.0, drain_penalty=0.0, frame_skip=1, skip_above=0.0,
+             max_frames=None, image_size=(84, 84), render_mode=None)
+    ```
+
+    The rest is ``Pinball-v0``'s (actions, rewards, episode end, infos; see ``PinballEnv``).
+    """
+
+    def __init__(
+        self,
+        num_layouts: int = 0,
+        start_layout: int = 0,
+        difficulty: str = "easy",
+        rays: int = 0,
+        obs_type: str = "state",
+        action_type: str = "discrete",
+        balls: int = 3,
+        reward_scale: float = 0.01,
+        height_shaping: float = 0.0,
+        drain_penalty: float = 0.0,
+        frame_skip: int = 1,
+        skip_above: float = 0.0,
+        max_frames: int | None = None,
+        image_size: int | tuple[int, int] = (84, 84),
+        render_mode: str | None = None,
+    ) -> None:
+        self.layouts = Layouts(num_layouts, start_layout, difficulty)
+        self.rays = check_rays(rays)
+        self.layout = self.layouts.start
+        super().__init__(
+            table=self.layouts.table(self.layout), obs_type=obs_type, action_type=action_type,
+            balls=balls, reward_scale=reward_scale, height_shaping=height_shaping,
+            drain_penalty=drain_penalty, frame_skip=frame_skip, skip_above=skip_above,
+            max_frames=max_frames, image_size=image_size, render_mode=render_mode,
+        )  # fmt: skip
+        if obs_type == "state":
+            self.observation_space = state_space(self.game, self.rays)
+        self._rays = np.zeros((1, self.rays), dtype=np.float32)
+
+    def _new_game(self, options: Mapping[str, Any] | None) -> None:
+        options = dict(options or {})
+        layout = options.pop("layout", None)
+        layout = self.layouts.draw(self.np_random) if layout is None else self.layouts.check(layout)
+        table = self.layouts.table(layout)
+        if table is not self.table:
+            self.game.set_table(0, table)
+            self.table, self.layout = table, layout
+            self._obs_renderer = obs_renderer(table, self.obs_type, self.image_size)
+            self._frame_renderer = None  # made for the new table when next rendered
+        self.game.new_game(0, self.np_random, options)
+
+    def _info(self) -> dict[str, Any]:
+        return {**self.game.info(0), "layout": self.layout}
+
+    def _observe(self) -> np.ndarray:
+        if self._obs_renderer is not None:
+            return super()._observe()
+        state = self.game.observe(normalised=True)
+        if self.rays:
+            observe_rays(self.game.world, self.rays, self._rays)
+            state = np.concatenate([state, self._rays], axis=1)
+        return state[0]
+
+
+def observe_rays(world: Any, n_rays: int, out: np.ndarray) -> np.ndarray:
+    """The ray distances (see PinballProcgenEnv) of every env of ``world`` into ``out``, in
+    one compiled call (shared by the world's threads)."""
+    args = (world.balls, world.geometries(), world.state.flipper_angle, n_rays, out)
+    world.threads.run(_cast_all_rays, world.n_envs, *args)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _cast_all_rays(balls, geometries, angles, n_rays, out, start, stop):
+    """:func:`cast_rays` for envs ``start`` to ``stop``, env i on ``geometries[i]``."""
+    for env in range(start, stop):
+        cast_rays(balls[env, BALL_X], balls[env, BALL_Y], n_rays, geometries[env], angles[env],
+                  out[env])  # fmt: skip
+
+
+class PinballProcgenVectorEnv(PinballVectorEnv):
+    """``num_envs`` games of ``PinballProcgen-v0``, each on its own table, stepped in one
+    kernel call (``World.set_table``); see ``PinballProcgenEnv`` and ``PinballVectorEnv``.
+
+    ``reset(options={"layout": L})`` plays layout ``L`` in every env reset, or
+    ``{"layout": [L0, L1, ...]}`` one per env (for evaluations on chosen layouts); later games
+    draw their layouts. ``infos["layout"]`` is each env's layout.
+
+    ```python
+    gym.make_vec("PinballProcgen-v0", num_envs=64, num_layouts=0, start_layout=0,
+                 difficulty="easy", rays=0, ...)  # and PinballVectorEnv's other arguments
+    ```
+    """
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        num_layouts: int = 0,
+        start_layout: int = 0,
+        difficulty: str = "easy",
+        rays: int = 0,
+        obs_type: str = "state",
+        action_type: str = "discrete",
+        balls: int = 3,
+        reward_scale: float = 0.01,
+        height_shaping: float = 0.0,
+        drain_penalty: float = 0.0,
+        frame_skip: int = 1,
+        skip_above: float = 0.0,
+        max_frames: int | None = None,
+        image_size: int | tuple[int, int] = (84, 84),
+        render_mode: str | None = None,
+        max_episode_steps: int | None = 7200,
+        num_threads: int | None = None,
+        autoreset_mode: Any = "NextStep",
+    ) -> None:
+        self.layouts = Layouts(num_layouts, start_layout, difficulty)
+        self.rays = check_rays(rays)
+        super().__init__(
+            num_envs=num_envs, table=self.layouts.table(self.layouts.start), obs_type=obs_type,
+            action_type=action_type, balls=balls, reward_scale=reward_scale,
+            height_shaping=height_shaping, drain_penalty=drain_penalty, frame_skip=frame_skip,
+            skip_above=skip_above, max_frames=max_frames, image_size=image_size,
+            render_mode=render_mode, max_episode_steps=max_episode_steps,
+            num_threads=num_threads, autoreset_mode=autoreset_mode,
+        )  # fmt: skip
+        self.layout = np.full(self.num_envs, self.layouts.start, dtype=np.int64)
+        if obs_type == "state":
+            self.single_observation_space = state_space(self.game, self.rays)
+            self.observation_space = spaces.Box(
+                np.tile(self.single_observation_space.low, (self.num_envs, 1)),
+                np.tile(self.single_observation_space.high, (self.num_envs, 1)),
+                dtype=np.float32,
+            )
+        self._rays = np.zeros((self.num_envs, self.rays), dtype=np.float32)
+        self._renderers: dict[int, Renderer] = {}
+
+    def _new_game(self, env: int, options: Mapping[str, Any] | None = None) -> None:
+        options = dict(options or {})
+        layout = options.pop("layout", None)
+        if isinstance(layout, (Sequence, np.ndarray)) and not isinstance(layout, str):
+            if len(layout) != self.num_envs:
+                raise ValueError(
+                    f"a list of layouts needs one per env ({self.num_envs}), got {len(layout)}"
+                )
+            layout = layout[env]
+        rng = self._rngs[env]
+        layout = self.layouts.draw(rng) if layout is None else self.layouts.check(layout)
+        table = self.layouts.table(layout)
+        if table is not self.game.world.table_of(env):
+            self.game.set_table(env, table)
+        self.layout[env] = layout
+        self.game.new_game(env, rng, options)
+
+    def _observe(self) -> np.ndarray:
+        if self.obs_type != "state":
+            world = self.game.world
+            frames = []
+            for env in range(self.num_envs):
+                renderer = self._renderer(int(self.layout[env]), world.table_of(env))
+                frames.append(renderer.frames(
+                    world.balls[env : env + 1], world.active[env : env + 1],
+                    world.state.flipper_angle[env : env + 1],
+                    grayscale=self.obs_type == "grayscale",
+                ))  # fmt: skip
+            return np.concatenate(frames)
+        state = self.game.observe(normalised=True)
+        if self.rays:
+            state = np.concatenate(
+                [state, observe_rays(self.game.world, self.rays, self._rays)], axis=1
+            )
+        return state
+
+    def _renderer(self, layout: int, table: Table) -> Renderer:
+        renderer = self._renderers.get(layout)
+        if renderer is None:
+            if len(self._renderers) >= CACHED_TABLES:
+                self._renderers.clear()
+            renderer = obs_renderer(table, self.obs_type, self.image_size)
+            self._renderers[layout] = renderer
+        return renderer
+
+    def _infos(self, envs: np.ndarray | None = None) -> dict[str, Any]:
+        infos = super()._infos(envs)
+        infos["layout"] = self.layout.copy()
+        infos["_layout"] = infos["_score"]
+        return infos
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Every env's frame, each of its own table (``render_mode="rgb_array"``)."""
+        if self.render_mode is None:
+            return None
+        from pinball_env.env import render_frame
+        from pinball_env.render import render_size
+
+        frames = []
+        for env in range(self.num_envs):
+            table = self.game.world.table_of(env)
+            frames.append(render_frame(Renderer(table, *render_size(table)), self.game, env))
+        return tuple(frames)
+
+
+__all__ = [
+    "RAY_RANGE",
+    "Layouts",
+    "PinballProcgenEnv",
+    "PinballProcgenVectorEnv",
+    "cast_rays",
+    "layout_table",
+    "observe_rays",
+]
