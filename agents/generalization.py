@@ -2,11 +2,11 @@
 ``PinballProcgen-v0``, each tested on held-out layouts.
 
     python -m agents.generalization --config configs/agents/procgen_ppo.yaml [key=value ...]
-        [--layouts 1 16 256 0] [--minutes 5] [--test-layouts 100] [--out DIR]
+        [--layouts 1 16 256 0] [--test-layouts 100] [--out DIR]
 
 For each number of training layouts N (0: unlimited), the config is trained with
-``num_layouts=N, start_layout=0`` for ``--minutes`` of wall time, then plays one game on each
-of:
+``num_layouts=N, start_layout=0`` for its ``total_timesteps`` (the same env steps for every N;
+``max_minutes``, if set, caps each run's wall time), then plays one game on each of:
 
 - **test**: ``--test-layouts`` layouts from ``TEST_START`` on, a range no training draw reaches;
 - **train**: as many games on its own training layouts (layout ``i mod N``; ``i`` when unlimited).
@@ -43,11 +43,10 @@ TEST_START = 10**12
 BOOTSTRAP_SAMPLES = 2000
 
 
-def with_layouts(config: TrainConfig, count: int, minutes: float) -> TrainConfig:
-    """``config`` training on layouts ``[0, count)`` (0: unlimited) for ``minutes``."""
+def with_layouts(config: TrainConfig, count: int) -> TrainConfig:
+    """``config`` training on layouts ``[0, count)`` (0: unlimited)."""
     data = config.to_dict()
     data["env"]["kwargs"] = {**data["env"]["kwargs"], "num_layouts": count, "start_layout": 0}
-    data["max_minutes"] = minutes
     return config_from_dict(data, f"<{config.env.id}, {count or 'unlimited'} layouts>")
 
 
@@ -86,7 +85,7 @@ def normalised(model: np.ndarray, random: np.ndarray, heuristic: np.ndarray, see
 
 
 def benchmark(
-    config: TrainConfig, counts: tuple[int, ...], minutes: float, n_test: int, out: Path
+    config: TrainConfig, counts: tuple[int, ...], n_test: int, out: Path
 ) -> list[dict[str, Any]]:
     """Train and test per number of layouts; write the results into ``out``."""
     if config.env.id != PROCGEN_ID:
@@ -102,7 +101,7 @@ def benchmark(
     test_baselines = {who: play(test_config, who, test_layouts) for who in BASELINES}
     results = []
     for count in counts:
-        trained = with_layouts(config, count, minutes)
+        trained = with_layouts(config, count)
         run = start(trained, out / f"layouts_{count}", ["agents.generalization", f"{count}"])
         started = time.monotonic()
         train(trained, run, progress_bar=False)
@@ -112,7 +111,10 @@ def benchmark(
             "test": (test_config, test_layouts, test_baselines),
             "train": (trained, train_layouts, None),
         }
-        row: dict[str, Any] = {"layouts": count, "run": run.name, "train_seconds": seconds}
+        steps = algorithm_class(config.algo).load(run / "model.zip").num_timesteps
+        row: dict[str, Any] = {
+            "layouts": count, "run": run.name, "train_seconds": seconds, "train_steps": steps
+        }  # fmt: skip
         for name, (env_config, layouts, baselines) in sets.items():
             scores = baselines or {who: play(env_config, who, layouts) for who in BASELINES}
             model = play(env_config, "model", layouts, run)
@@ -126,9 +128,9 @@ def benchmark(
         print(
             f"{count or 'unlimited'} layouts: test {row['test']['normalised']:.2f} "
             f"{_interval(row['test']['ci95'])}, train {row['train']['normalised']:.2f} "
-            f"{_interval(row['train']['ci95'])} ({seconds / 60:.1f} min of training)"
+            f"{_interval(row['train']['ci95'])} ({steps} steps, {seconds / 60:.1f} min)"
         )
-        write(results, out, config, minutes, n_test)
+        write(results, out, config, n_test)
     return results
 
 
@@ -136,9 +138,9 @@ def _interval(interval: list[float]) -> str:
     return f"({interval[0]:.2f} to {interval[1]:.2f})"
 
 
-def write(results: list[dict], out: Path, config: TrainConfig, minutes: float, n: int) -> None:
-    summary = {"config": config.to_dict(), "minutes_per_run": minutes, "test_layouts": n,
-               "test_start": TEST_START, "results": results}  # fmt: skip
+def write(results: list[dict], out: Path, config: TrainConfig, n: int) -> None:
+    summary = {"config": config.to_dict(), "test_layouts": n, "test_start": TEST_START,
+               "results": results}  # fmt: skip
     (out / "generalization.json").write_text(json.dumps(summary, indent=1))
     with open(out / "generalization.csv", "w", newline="") as file:
         writer = csv.writer(file)
@@ -149,10 +151,10 @@ def write(results: list[dict], out: Path, config: TrainConfig, minutes: float, n
                 r = row[name]
                 writer.writerow([row["layouts"] or "unlimited", name, r["normalised"],
                                  *r["ci95"], r["model"], r["random"], r["heuristic"]])  # fmt: skip
-    plot(results, out / "generalization.png", minutes)
+    plot(results, out / "generalization.png", config.total_timesteps)
 
 
-def plot(results: list[dict], path: Path, minutes: float) -> None:
+def plot(results: list[dict], path: Path, steps: int) -> None:
     """Train and test normalised score (with 95% intervals) against the training layouts."""
     import matplotlib
 
@@ -172,7 +174,7 @@ def plot(results: list[dict], path: Path, minutes: float) -> None:
     ax.set_xticks(x, labels)
     ax.set_xlabel("training layouts")
     ax.set_ylabel("score, normalised (random 0, heuristic 1)")
-    ax.set_title(f"PPO on PinballProcgen-v0, {minutes:g} min of training each")
+    ax.set_title(f"PPO on PinballProcgen-v0, {steps:,} env steps of training each")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -186,18 +188,17 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     parser.add_argument("overrides", nargs="*", help="key=value settings over the config")
     parser.add_argument("--layouts", type=int, nargs="+", default=list(LAYOUT_COUNTS),
                         help="numbers of training layouts (0: unlimited)")  # fmt: skip
-    parser.add_argument("--minutes", type=float, default=5.0, help="training time per count")
     parser.add_argument("--test-layouts", type=int, default=100, help="held-out layouts")
     parser.add_argument("--out", type=Path, help="output folder")
     args = parser.parse_args(argv)
     try:
         if any(count < 0 for count in args.layouts):
             raise ConfigError(f"--layouts must be >= 0 (0: unlimited), got {args.layouts}")
-        if args.minutes <= 0 or args.test_layouts < 2:
-            raise ConfigError("--minutes must be > 0 and --test-layouts >= 2")
+        if args.test_layouts < 2:
+            raise ConfigError(f"--test-layouts must be >= 2, got {args.test_layouts}")
         config = load_config(args.config, args.overrides)
         out = args.out or Path("runs") / f"generalization_{time.strftime('%Y%m%d-%H%M%S')}"
-        results = benchmark(config, tuple(args.layouts), args.minutes, args.test_layouts, out)
+        results = benchmark(config, tuple(args.layouts), args.test_layouts, out)
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
     print(f"wrote {out / 'generalization.json'} and {out / 'generalization.png'}")

@@ -9,6 +9,7 @@ from one table to the next.
 import functools
 import math
 from collections.abc import Mapping, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -46,6 +47,13 @@ def layout_table(seed: int, difficulty: str) -> Table:
     return generate_table(seed, difficulty)
 
 
+@functools.cache
+def _prefetcher() -> ThreadPoolExecutor:
+    """The thread that generates the tables of the games to come (its simulation releases the
+    GIL, so it runs beside the training on a second core)."""
+    return ThreadPoolExecutor(1, thread_name_prefix="pinball-layouts")
+
+
 class Layouts:
     """The layouts an env plays: seeds ``[start, start + count)``, ``count`` 0 for unlimited."""
 
@@ -57,6 +65,8 @@ class Layouts:
         self.count = int(count)
         self.start = int(start)
         self.difficulty = difficulty
+        self._upcoming: dict[int, int] = {}  # env -> the layout of its next game
+        self._pending: dict[int, Future] = {}  # layout -> its table, being generated
         if self.start + (self.count or UNLIMITED_LAYOUTS) - 1 > MAX_SEED:
             raise ValueError(f"layouts beyond seed {MAX_SEED}: lower start_layout")
 
@@ -72,8 +82,33 @@ class Layouts:
             raise ValueError(f"layout must be an integer in [{self.start}, {end}), got {layout!r}")
         return int(layout)
 
+    def pick(self, env: int, rng: np.random.Generator, chosen: object = None) -> int:
+        """The layout of env ``env``'s next game: ``chosen`` (checked), or the one drawn for it
+        at its last game. Then the one after is drawn, and generated in the background while
+        this game is played (unlimited layouts would wait for each table otherwise)."""
+        if chosen is not None:
+            return self.check(chosen)
+        layout = self._upcoming.pop(env, None)
+        if layout is None:
+            layout = self.draw(rng)
+        self._upcoming[env] = upcoming = self.draw(rng)
+        if upcoming not in self._pending and len(self._pending) < CACHED_TABLES:
+            self._pending[upcoming] = _prefetcher().submit(layout_table, upcoming, self.difficulty)
+        return layout
+
+    def forget(self) -> None:
+        """Drop the layouts drawn ahead (the envs' random generators were seeded again)."""
+        self._upcoming.clear()
+        self._pending.clear()  # their tables still land in the cache
+
     def table(self, layout: int) -> Table:
+        pending = self._pending.pop(layout, None)
+        if pending is not None:
+            return pending.result()
         return layout_table(layout, self.difficulty)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_pending": {}}  # a copy generates its own
 
 
 def state_space(game: Any, rays: int) -> spaces.Box:
@@ -84,11 +119,13 @@ def state_space(game: Any, rays: int) -> spaces.Box:
     return spaces.Box(low, high, dtype=np.float32)
 
 
-def check_rays(rays: object) -> int:
+def check_rays(rays: object, obs_type: str) -> int:
     if isinstance(rays, bool) or not isinstance(rays, (int, np.integer)):
         raise ValueError(f"rays must be an integer, got {rays!r}")
     if not 0 <= rays <= MAX_RAYS:
         raise ValueError(f"rays must be in [0, {MAX_RAYS}], got {rays}")
+    if rays and obs_type != "state":
+        raise ValueError(f"rays are part of the state observation, not of obs_type={obs_type!r}")
     return int(rays)
 
 
@@ -206,7 +243,7 @@ class PinballProcgenEnv(PinballEnv):
         render_mode: str | None = None,
     ) -> None:
         self.layouts = Layouts(num_layouts, start_layout, difficulty)
-        self.rays = check_rays(rays)
+        self.rays = check_rays(rays, obs_type)
         self.layout = self.layouts.start
         super().__init__(
             table=self.layouts.table(self.layout), obs_type=obs_type, action_type=action_type,
@@ -218,10 +255,16 @@ class PinballProcgenEnv(PinballEnv):
             self.observation_space = state_space(self.game, self.rays)
         self._rays = np.zeros((1, self.rays), dtype=np.float32)
 
+    def reset(
+        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        if seed is not None:
+            self.layouts.forget()
+        return super().reset(seed=seed, options=options)
+
     def _new_game(self, options: Mapping[str, Any] | None) -> None:
         options = dict(options or {})
-        layout = options.pop("layout", None)
-        layout = self.layouts.draw(self.np_random) if layout is None else self.layouts.check(layout)
+        layout = self.layouts.pick(0, self.np_random, options.pop("layout", None))
         table = self.layouts.table(layout)
         if table is not self.table:
             self.game.set_table(0, table)
@@ -296,7 +339,7 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
         autoreset_mode: Any = "NextStep",
     ) -> None:
         self.layouts = Layouts(num_layouts, start_layout, difficulty)
-        self.rays = check_rays(rays)
+        self.rays = check_rays(rays, obs_type)
         super().__init__(
             num_envs=num_envs, table=self.layouts.table(self.layouts.start), obs_type=obs_type,
             action_type=action_type, balls=balls, reward_scale=reward_scale,
@@ -316,6 +359,16 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
         self._rays = np.zeros((self.num_envs, self.rays), dtype=np.float32)
         self._renderers: dict[int, Renderer] = {}
 
+    def reset(
+        self,
+        *,
+        seed: int | list[int | None] | None = None,
+        options: Mapping[str, Any] | None = None,
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        if seed is not None:
+            self.layouts.forget()
+        return super().reset(seed=seed, options=options)
+
     def _new_game(self, env: int, options: Mapping[str, Any] | None = None) -> None:
         options = dict(options or {})
         layout = options.pop("layout", None)
@@ -326,7 +379,7 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
                 )
             layout = layout[env]
         rng = self._rngs[env]
-        layout = self.layouts.draw(rng) if layout is None else self.layouts.check(layout)
+        layout = self.layouts.pick(env, rng, layout)
         table = self.layouts.table(layout)
         if table is not self.game.world.table_of(env):
             self.game.set_table(env, table)

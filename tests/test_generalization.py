@@ -12,15 +12,16 @@ from agents.generalization import TEST_START, normalised
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "agents" / "procgen_ppo.yaml"
-TINY = ["hyperparams.n_steps=16", "hyperparams.batch_size=32", "env.num_envs=2"]
+TINY = ["hyperparams.n_steps=16", "hyperparams.batch_size=32", "env.num_envs=2",
+        "total_timesteps=96"]  # fmt: skip
 
 
 def test_the_benchmark_trains_and_tests_each_layout_count(tmp_path):
     out = tmp_path / "bench"
     results = generalization.main(["--config", str(CONFIG), *TINY, "--layouts", "1", "0",
-                                   "--minutes", "0.02", "--test-layouts", "3",
-                                   "--out", str(out)])  # fmt: skip
+                                   "--test-layouts", "3", "--out", str(out)])  # fmt: skip
     assert [row["layouts"] for row in results] == [1, 0]
+    assert [row["train_steps"] for row in results] == [96, 96]
     for row in results:
         for name in ("train", "test"):
             assert set(row[name]) == {"normalised", "ci95", "model", "random", "heuristic"}

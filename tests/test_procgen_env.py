@@ -143,3 +143,21 @@ def test_the_procgen_env_is_in_gymnasiums_registry():
     assert spec.max_episode_steps == 7200
     env = gym.make("PinballProcgen-v0", num_layouts=2)
     assert isinstance(env.unwrapped, PinballProcgenEnv)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"num_layouts": -1}, "num_layouts must be an integer >= 0"),
+        ({"start_layout": 1.5}, "start_layout must be an integer >= 0"),
+        ({"start_layout": 2**63 - 10, "num_layouts": 0}, "beyond seed"),
+        ({"difficulty": "medium"}, "difficulty must be one of"),
+        ({"rays": 65}, r"rays must be in \[0, 64\]"),
+        ({"rays": 8, "obs_type": "rgb"}, "rays are part of the state observation"),
+    ],
+)
+def test_bad_procgen_options_are_clear_errors(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        PinballProcgenEnv(**kwargs)
+    with pytest.raises(ValueError, match=message):
+        PinballProcgenVectorEnv(num_envs=2, **kwargs)
