@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium import spaces
 from numba import njit
 
-from pinball_env.env import PinballEnv, obs_renderer
+from pinball_env.env import PinballEnv, obs_renderer, render_frame
 from pinball_env.game import check_choice
 from pinball_env.physics.columns import (
     BALL_X,
@@ -28,7 +28,7 @@ from pinball_env.physics.columns import (
     FLIPPER_TIP_RADIUS,
 )
 from pinball_env.procgen import DIFFICULTIES, MAX_SEED, generate_table
-from pinball_env.render import Renderer
+from pinball_env.render import Renderer, render_size
 from pinball_env.table import Table
 from pinball_env.vector_env import PinballVectorEnv
 
@@ -357,7 +357,7 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
                 dtype=np.float32,
             )
         self._rays = np.zeros((self.num_envs, self.rays), dtype=np.float32)
-        self._renderers: dict[int, Renderer] = {}
+        self._renderers: dict[tuple[int, bool], Renderer] = {}
 
     def reset(
         self,
@@ -405,13 +405,19 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
             )
         return state
 
-    def _renderer(self, layout: int, table: Table) -> Renderer:
-        renderer = self._renderers.get(layout)
+    def _renderer(self, layout: int, table: Table, frame: bool = False) -> Renderer:
+        """The observation renderer of a layout (or its full-size frame renderer), made once:
+        a renderer rasterises its table's static layer when made."""
+        key = (layout, frame)
+        renderer = self._renderers.get(key)
         if renderer is None:
             if len(self._renderers) >= CACHED_TABLES:
                 self._renderers.clear()
-            renderer = obs_renderer(table, self.obs_type, self.image_size)
-            self._renderers[layout] = renderer
+            if frame:
+                renderer = Renderer(table, *render_size(table))
+            else:
+                renderer = obs_renderer(table, self.obs_type, self.image_size)
+            self._renderers[key] = renderer
         return renderer
 
     def _infos(self, envs: np.ndarray | None = None) -> dict[str, Any]:
@@ -424,14 +430,12 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
         """Every env's frame, each of its own table (``render_mode="rgb_array"``)."""
         if self.render_mode is None:
             return None
-        from pinball_env.env import render_frame
-        from pinball_env.render import render_size
-
-        frames = []
-        for env in range(self.num_envs):
-            table = self.game.world.table_of(env)
-            frames.append(render_frame(Renderer(table, *render_size(table)), self.game, env))
-        return tuple(frames)
+        world = self.game.world
+        return tuple(
+            render_frame(self._renderer(int(self.layout[env]), world.table_of(env), True),
+                         self.game, env)
+            for env in range(self.num_envs)
+        )  # fmt: skip
 
 
 __all__ = [

@@ -177,12 +177,7 @@ class World:
             self._scores = np.zeros(self.state.hits.shape, dtype=np.int64)
             self._scores[:] = self.table.element_scores
             self._pack_tables()
-        packed = self._packed.get(id(table))
-        if packed is None or packed[0] is not table:
-            if len(self._packed) >= MAX_PACKED:
-                self._packed.clear()
-            packed = self._packed[id(table)] = (table, table.pack(), table.pack_settings())
-        _, geometry, settings = packed
+        geometry, settings = self._pack(table)
         self._fit(element_count(geometry), geometry.sensors.shape[0], settings.max_passes)
         self._tables[env] = table
         self._geometries[env] = geometry
@@ -192,11 +187,20 @@ class World:
         self.rest_flippers(env)
         self.place_ball(env, table.ball.start, table.ball.velocity)
 
+    def _pack(self, table: Table) -> tuple[Any, Any]:
+        """``table``'s packed arrays and settings, packed once per table."""
+        packed = self._packed.get(id(table))
+        if packed is None or packed[0] is not table:
+            if len(self._packed) >= MAX_PACKED:
+                self._packed.clear()
+            packed = self._packed[id(table)] = (table, table.pack(), table.pack_settings())
+        return packed[1], packed[2]
+
     def _pack_tables(self) -> None:
-        """The kernel's typed lists of every env's packed table (each table packed once)."""
-        packed = {id(t): (t.pack(), t.pack_settings()) for t in self._tables}
-        self._geometries = List([packed[id(t)][0] for t in self._tables])
-        self._settings = List([packed[id(t)][1] for t in self._tables])
+        """The kernel's typed lists of every env's packed table."""
+        packed = [self._pack(t) for t in self._tables]
+        self._geometries = List([geometry for geometry, _ in packed])
+        self._settings = List([settings for _, settings in packed])
         self._entry = None
 
     def _fit(self, n_elements: int, n_sensors: int, max_passes: int) -> None:
@@ -281,6 +285,7 @@ class World:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
         state["_geometries"] = state["_settings"] = state["_same_geometries"] = None  # nor lists
+        state["_packed"] = {}  # keyed by ids, which a copy's tables do not keep
         return state
 
     def __setstate__(self, state: dict) -> None:
