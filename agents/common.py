@@ -12,7 +12,7 @@ import gymnasium as gym
 import numpy as np
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
-from agents.config import TrainConfig
+from agents.config import AnyConfig, TrainConfig
 from pinball_env.heuristic import HeuristicPolicy
 from pinball_env.wrappers import SB3VecEnv
 
@@ -90,10 +90,10 @@ def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
     return heuristic
 
 
-def run_name(config: TrainConfig, when: str) -> str:
-    """A run folder's name: env, algorithm, seed and start time."""
+def run_name(config: AnyConfig, when: str) -> str:
+    """A run folder's name: env, algorithm (``rllib-ppo`` for RLlib), seed and start time."""
     env = config.env.id.replace("/", "-")
-    return f"{env}_{config.algo}_seed{config.seed}_{when}"
+    return f"{env}_{config.label}_seed{config.seed}_{when}"
 
 
 def atomic_write(path: Path, write: Callable[[Any], None]) -> None:

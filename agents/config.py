@@ -6,12 +6,16 @@ anything is built. ``key=value`` overrides (dotted keys into the sections, YAML 
 on top of the file::
 
     python -m agents.train --config configs/agents/ppo.yaml total_timesteps=200000 env.num_envs=8
+
+:class:`TrainConfig` is a stable-baselines3 run (``agents.train``), :class:`RllibConfig` a Ray
+RLlib run (``agents.rllib``); both share :class:`EnvConfig` and the checks of the env.
 """
 
 import dataclasses
 import inspect
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -103,9 +107,74 @@ class TrainConfig:
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
 
+    @property
+    def label(self) -> str:
+        """The algorithm as run folders name it."""
+        return self.algo
 
-def load_config(path: str | os.PathLike[str], overrides: list[str] = ()) -> TrainConfig:
-    """The config in the YAML file ``path`` with ``key=value`` overrides applied, checked."""
+    @property
+    def training_seeds(self) -> int:
+        """How many seeds from ``seed`` on the training games start from."""
+        return self.env.num_envs
+
+
+@dataclass(frozen=True)
+class RllibConfig:
+    """A Ray RLlib run (``agents.rllib``): PPO on RLlib's current API stack, its env runners
+    stepping the native vector env."""
+
+    algo: str = "ppo"
+    """RLlib's PPO (the one algorithm shipped)."""
+    total_timesteps: int = 1_000_000
+    """Env steps to sample, summed over all env runners and their envs."""
+    max_minutes: float = 0.0
+    """Wall-clock limit [min] (0: none), checked after each training iteration."""
+    seed: int = 0
+    """Seed of the algorithm; env runner k first resets its env i with seed + k + i."""
+    env_runners: int = 2
+    """Remote env runner actors (``num_env_runners``; 0: sample in the driver)."""
+    cpus_per_env_runner: float = 1.0
+    """CPUs Ray reserves for each env runner (``num_cpus_per_env_runner``)."""
+    torch_threads: int = 1
+    """torch's thread count in the driver (the learner)."""
+    env_threads: int = 1
+    """Threads that step each env runner's physics."""
+    hyperparams: dict[str, Any] = field(default_factory=dict)
+    """Keyword arguments of ``PPOConfig.training`` (lr, gamma, lambda_, num_epochs,
+    train_batch_size_per_learner, minibatch_size, entropy_coeff...)."""
+    model: dict[str, Any] = field(default_factory=dict)
+    """Fields of RLlib's ``DefaultModelConfig`` (fcnet_hiddens, fcnet_activation...)."""
+    env: EnvConfig = field(default_factory=EnvConfig)
+    """The environment; ``num_envs`` games per env runner, ``normalize`` runs RLlib's
+    ``MeanStdFilter`` over the observations."""
+    checkpoint_every: int = 500_000
+    """Write a checkpoint every this many env steps (0: only the final model)."""
+    eval_seed: int = 100_000
+    """First seed of evaluation games; training never uses seeds from here on."""
+    notes: str = ""
+    """Free text: what this config is for."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    @property
+    def label(self) -> str:
+        return f"rllib-{self.algo}"
+
+    @property
+    def training_seeds(self) -> int:
+        """How many seeds from ``seed`` on the training games start from."""
+        return self.env_runners + self.env.num_envs
+
+
+AnyConfig = TrainConfig | RllibConfig
+
+
+def load_config(
+    path: str | os.PathLike[str], overrides: list[str] = (), kind: type = TrainConfig
+) -> AnyConfig:
+    """The config (a ``kind``) in the YAML file ``path`` with ``key=value`` overrides applied,
+    checked."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -119,7 +188,7 @@ def load_config(path: str | os.PathLike[str], overrides: list[str] = ()) -> Trai
         raise ConfigError(f"{path}: a config is a mapping of keys, got {type(data).__name__}")
     for item in overrides:
         apply_override(data, item, path)
-    return config_from_dict(data, str(path))
+    return config_from_dict(data, str(path), kind)
 
 
 def apply_override(data: dict[str, Any], item: str, source: str | Path = "override") -> None:
@@ -140,15 +209,35 @@ def apply_override(data: dict[str, Any], item: str, source: str | Path = "overri
     node[last] = value
 
 
-def config_from_dict(data: dict[str, Any], source: str = "<config>") -> TrainConfig:
-    """A checked :class:`TrainConfig` from plain data."""
+def load_run_config(run: Path) -> AnyConfig:
+    """The config a run folder was trained with: an RLlib run's (it has ``env_runners``) or a
+    stable-baselines3 run's."""
+    path = run / "config.yaml"
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as error:
+        raise ConfigError(f"{path}: cannot read the run's config: {error}") from None
+    kind = RllibConfig if isinstance(data, dict) and "env_runners" in data else TrainConfig
+    return load_config(path, kind=kind)
+
+
+def config_from_dict(
+    data: dict[str, Any], source: str = "<config>", kind: type = TrainConfig
+) -> AnyConfig:
+    """A checked config (:class:`TrainConfig` or :class:`RllibConfig`) from plain data."""
     data = dict(data)
     env_data = data.pop("env", {}) or {}
     if not isinstance(env_data, dict):
         raise ConfigError(f"{source}: env: must be a mapping")
-    _check_keys(data, TrainConfig, source, "")
+    if kind is TrainConfig and "env_runners" in data:
+        raise ConfigError(f"{source}: an RLlib config (it has env_runners): train it with "
+                          "python -m agents.rllib")  # fmt: skip
+    if kind is RllibConfig and "policy" in data:
+        raise ConfigError(f"{source}: a stable-baselines3 config (it has a policy): train it "
+                          "with python -m agents.train")  # fmt: skip
+    _check_keys(data, kind, source, "")
     _check_keys(env_data, EnvConfig, source, "env.")
-    config = TrainConfig(**data, env=EnvConfig(**env_data))
+    config = kind(**data, env=EnvConfig(**env_data))
     check_config(config, source)
     return config
 
@@ -162,7 +251,7 @@ def _check_keys(data: dict[str, Any], cls: type, source: str, prefix: str) -> No
             )
 
 
-def check_config(config: TrainConfig, source: str = "<config>") -> None:
+def check_config(config: AnyConfig, source: str = "<config>") -> None:
     """Raise ConfigError naming the first key whose value cannot be used."""
 
     def fail(key: str, problem: str) -> None:
@@ -172,10 +261,6 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
         if not isinstance(value, int) or isinstance(value, bool) or value < low:
             fail(key, f"must be an integer >= {low}, got {value!r}")
 
-    if config.algo not in ALGORITHMS:
-        fail("algo", f"unknown algorithm {config.algo!r} (known: {', '.join(ALGORITHMS)})")
-    if config.policy not in POLICIES:
-        fail("policy", f"unknown policy {config.policy!r} (known: {', '.join(POLICIES)})")
     integer("total_timesteps", config.total_timesteps, 1)
     integer("seed", config.seed, 0)
     minutes = config.max_minutes
@@ -189,54 +274,143 @@ def check_config(config: TrainConfig, source: str = "<config>") -> None:
     integer("env.frame_stack", config.env.frame_stack, 1)
     if not isinstance(config.env.normalize, bool):
         fail("env.normalize", f"must be true or false, got {config.env.normalize!r}")
+    if not isinstance(config.notes, str):
+        fail("notes", "must be text")
+    if not isinstance(config.hyperparams, dict):
+        fail("hyperparams", "must be a mapping of the algorithm's keyword arguments")
+    if isinstance(config, RllibConfig):
+        integer("env_runners", config.env_runners, 0)
+        _check_rllib(config, fail)
+    else:
+        _check_sb3(config, fail)
+    seeds = config.training_seeds
+    if config.eval_seed < config.seed + seeds:
+        fail("eval_seed", f"{config.eval_seed} overlaps the training seeds {config.seed}.."
+                          f"{config.seed + seeds - 1}")  # fmt: skip
+    _check_env(config.env, fail)
+
+
+def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
+    """The stable-baselines3 parts: algorithm, policy, its options, the torch device."""
+    if config.algo not in ALGORITHMS:
+        fail("algo", f"unknown algorithm {config.algo!r} (known: {', '.join(ALGORITHMS)})")
+    if config.policy not in POLICIES:
+        fail("policy", f"unknown policy {config.policy!r} (known: {', '.join(POLICIES)})")
     try:
         import torch
 
         torch.device(config.device)
     except (RuntimeError, TypeError):
         fail("device", f"not a torch device: {config.device!r}")
-    if not isinstance(config.notes, str):
-        fail("notes", "must be text")
-    if config.eval_seed < config.seed + config.env.num_envs:
-        fail(
-            "eval_seed",
-            f"{config.eval_seed} overlaps the training seeds {config.seed}.."
-            f"{config.seed + config.env.num_envs - 1}",
-        )
-    if not isinstance(config.hyperparams, dict):
-        fail("hyperparams", "must be a mapping of the algorithm's keyword arguments")
     taken = set(inspect.signature(algorithm_class(config.algo).__init__).parameters)
     taken -= {"self", "policy", "env", "seed", "device", "tensorboard_log", "verbose"}
+    _check_options("hyperparams", config.hyperparams, taken, config.algo.upper(), fail)
     for key, value in config.hyperparams.items():
-        if key not in taken:
-            fail(f"hyperparams.{key}", f"not an option of {config.algo.upper()}")
-        if isinstance(value, float) and not math.isfinite(value):
-            fail(f"hyperparams.{key}", f"must be finite, got {value!r}")
-    try:
-        spec = gym.spec(config.env.id) if isinstance(config.env.id, str) else None
-    except gym.error.Error:
-        spec = None
-    if spec is None or spec.entry_point not in PINBALL_ENVS:
-        fail("env.id", f"{config.env.id!r} is not a registered pinball environment")
-    env_class = PINBALL_ENVS[spec.entry_point]
-    if not isinstance(config.env.kwargs, dict):
-        fail("env.kwargs", f"must be a mapping of {config.env.id}'s options")
-    options = set(inspect.signature(env_class.__init__).parameters) - {"self"}
-    options |= set(VECTOR_ONLY_KWARGS)
-    for key in config.env.kwargs:
-        if key in FORBIDDEN_ENV_KWARGS or key not in options:
-            fail(f"env.kwargs.{key}", f"not a training option of {config.env.id}")
-    steps = config.env.kwargs.get("max_episode_steps", 1)
-    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
-        fail("env.kwargs.max_episode_steps", f"must be an integer >= 1, got {steps!r}")
-    try:  # the env's own checks of its options (a table that cannot be loaded, say)
-        env_class(**{k: v for k, v in config.env.kwargs.items() if k not in VECTOR_ONLY_KWARGS})
-    except (ValueError, TypeError) as error:  # TableError is a ValueError
-        fail("env.kwargs", str(error))
+        if isinstance(value, str) and key in SCHEDULES and linear_start(value) is None:
+            fail(f"hyperparams.{key}", f"a schedule is lin_X with X > 0, got {value!r}")
     image = config.env.kwargs.get("obs_type", "state") != "state"
     if image != (config.policy == "CnnPolicy"):
         obs_type = config.env.kwargs.get("obs_type", "state")
         fail("policy", f"{config.policy} does not fit obs_type {obs_type!r}")
+
+
+# PPOConfig.training options that are code, not settings, or belong to other keys (model).
+RLLIB_NOT_HYPERPARAMS = {
+    "self", "kwargs", "model", "optimizer", "learner_class", "learner_connector",
+    "add_default_connectors_to_learner_pipeline", "learner_config_dict", "lr_schedule",
+    "vf_share_layers",
+}  # fmt: skip
+
+
+def _check_rllib(config: RllibConfig, fail: Callable[[str, str], None]) -> None:
+    """The RLlib parts: PPO, its training options and model fields, state observations."""
+    if config.algo != "ppo":
+        fail("algo", f"unknown algorithm {config.algo!r} (RLlib runs ship PPO only)")
+    cpus = config.cpus_per_env_runner
+    if isinstance(cpus, bool) or not isinstance(cpus, (int, float)) or not 0 < cpus <= 1024:
+        fail("cpus_per_env_runner", f"must be a number of CPUs > 0, got {cpus!r}")
+    try:
+        from ray.rllib.algorithms.algorithm_config import AlgorithmConfig
+        from ray.rllib.algorithms.ppo import PPOConfig
+        from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+    except ImportError:
+        fail("algo", "Ray RLlib is not installed: pip install -e '.[distributed]'")
+    taken = set(inspect.signature(PPOConfig.training).parameters)
+    taken |= set(inspect.signature(AlgorithmConfig.training).parameters)
+    _check_options("hyperparams", config.hyperparams, taken - RLLIB_NOT_HYPERPARAMS, "PPO", fail)
+    if not isinstance(config.model, dict):
+        fail("model", "must be a mapping of DefaultModelConfig fields")
+    fields = {f.name for f in dataclasses.fields(DefaultModelConfig)}
+    _check_options("model", config.model, fields, "DefaultModelConfig", fail)
+    if config.env.kwargs.get("obs_type", "state") != "state":
+        fail("env.kwargs.obs_type", "RLlib runs train on state observations")
+    if config.env.frame_stack != 1:
+        fail("env.frame_stack", "RLlib runs do not stack frames")
+
+
+def _check_options(
+    key: str, options: dict[str, Any], taken: set[str], owner: str,
+    fail: Callable[[str, str], None],
+) -> None:  # fmt: skip
+    for name, value in options.items():
+        if name not in taken:
+            fail(f"{key}.{name}", f"not an option of {owner}")
+        if isinstance(value, float) and not math.isfinite(value):
+            fail(f"{key}.{name}", f"must be finite, got {value!r}")
+
+
+def _check_env(env: EnvConfig, fail: Callable[[str, str], None]) -> None:
+    """The env id, its options (each one the env takes, its own checks passed)."""
+    try:
+        spec = gym.spec(env.id) if isinstance(env.id, str) else None
+    except gym.error.Error:
+        spec = None
+    if spec is None or spec.entry_point not in PINBALL_ENVS:
+        fail("env.id", f"{env.id!r} is not a registered pinball environment")
+    env_class = PINBALL_ENVS[spec.entry_point]
+    if not isinstance(env.kwargs, dict):
+        fail("env.kwargs", f"must be a mapping of {env.id}'s options")
+    options = set(inspect.signature(env_class.__init__).parameters) - {"self"}
+    options |= set(VECTOR_ONLY_KWARGS)
+    for key in env.kwargs:
+        if key in FORBIDDEN_ENV_KWARGS or key not in options:
+            fail(f"env.kwargs.{key}", f"not a training option of {env.id}")
+    steps = env.kwargs.get("max_episode_steps", 1)
+    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
+        fail("env.kwargs.max_episode_steps", f"must be an integer >= 1, got {steps!r}")
+    try:  # the env's own checks of its options (a table that cannot be loaded, say)
+        env_class(**{k: v for k, v in env.kwargs.items() if k not in VECTOR_ONLY_KWARGS})
+    except (ValueError, TypeError) as error:  # TableError is a ValueError
+        fail("env.kwargs", str(error))
+
+
+# stable-baselines3 options that take a schedule: "lin_X" (rl-zoo3's notation) is X decayed
+# linearly to 0 over the run's total_timesteps.
+SCHEDULES = ("learning_rate", "clip_range")
+
+
+def linear_start(text: str) -> float | None:
+    """X of ``"lin_X"`` (a positive finite number), or None."""
+    if not text.startswith("lin_"):
+        return None
+    try:
+        start = float(text.removeprefix("lin_"))
+    except ValueError:
+        return None
+    return start if math.isfinite(start) and start > 0 else None
+
+
+def sb3_hyperparams(config: TrainConfig) -> dict[str, Any]:
+    """The algorithm's keyword arguments, ``lin_X`` schedules made functions of the progress
+    left (1 at the start of the run, 0 at total_timesteps)."""
+
+    def linear(start: float) -> Callable[[float], float]:
+        return lambda progress_remaining: progress_remaining * start
+
+    return {
+        key: linear(linear_start(value)) if key in SCHEDULES and isinstance(value, str) else value
+        for key, value in config.hyperparams.items()
+    }
 
 
 def algorithm_class(name: str) -> type:
@@ -250,5 +424,5 @@ def algorithm_class(name: str) -> type:
     }[name]
 
 
-def save_config(config: TrainConfig, path: Path) -> None:
+def save_config(config: AnyConfig, path: Path) -> None:
     path.write_text(yaml.safe_dump(config.to_dict(), sort_keys=False))

@@ -20,18 +20,23 @@ frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/P
   on the same games, their results in ``OUT/random`` and ``OUT/heuristic``).
 
 ``report(run)`` (``python -m agents.train ... --report``) does all of it for a run and its two
-baselines and writes ``report.json``. Models are pickles: load only models you trust.
+baselines and writes ``report.json``. An RLlib run or checkpoint folder (``agents.rllib``) plays
+the same games through its checkpoint's RL module and observation filter. Models are pickles:
+load only models you trust.
 """
 
 import argparse
 import csv
+import dataclasses
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from agents import rllib
 from agents.common import (
     BASELINES,
     CONFIG_FILE,
@@ -41,13 +46,21 @@ from agents.common import (
     make_env,
     stats_for,
 )
-from agents.config import ConfigError, TrainConfig, algorithm_class, config_from_dict, load_config
+from agents.config import (
+    AnyConfig,
+    ConfigError,
+    TrainConfig,
+    algorithm_class,
+    config_from_dict,
+    load_config,
+    load_run_config,
+)
 
 # The baselines play frame by frame, on the model's table (or layouts) with the default rewards.
 BASELINE_KWARGS = ("table", "balls", "num_layouts", "start_layout", "difficulty")
 
 
-def baseline_config(name: str, config: TrainConfig | None = None) -> TrainConfig:
+def baseline_config(name: str, config: AnyConfig | None = None) -> TrainConfig:
     """The config a baseline plays with: the env, table (or layouts) and balls of ``config``,
     one frame a step."""
     kwargs = {} if config is None else config.env.kwargs
@@ -138,7 +151,7 @@ def evaluate(
     out: Path | None = None,
     video: Path | None = None,
     curve: bool = False,
-    like: TrainConfig | None = None,
+    like: AnyConfig | None = None,
 ) -> dict[str, Any]:
     """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
     returns the summary. A baseline plays on ``table``, or on the env (and layouts) of the
@@ -155,32 +168,49 @@ def evaluate(
         config = baseline_config(policy, like)
         stats, name = None, policy
         out = out or Path("evals") / policy
+
+        def make_policy(venv: Any, seed: int) -> Policy:
+            return baseline_policy(policy, venv, seed)
+
     else:
         import torch
 
-        model, config, path = load_model(model_path)
-        torch.set_num_threads(config.torch_threads)
-        stats, name = stats_for(path), str(model_path)
-        out = out or (model_path if model_path.is_dir() else path.parent) / "eval"
+        name = str(model_path)
+        out = out or (model_path if model_path.is_dir() else model_path.parent) / "eval"
+        if rllib.is_checkpoint(model_path):
+            checkpoint, config = rllib.load_checkpoint(model_path)
+            torch.set_num_threads(config.torch_threads)
+            act = rllib.checkpoint_policy(checkpoint)  # applies its own observation filter
+            config = dataclasses.replace(
+                config, env=dataclasses.replace(config.env, normalize=False)
+            )
+            stats = None
+        else:
+            model, config, path = load_model(model_path)
+            torch.set_num_threads(config.torch_threads)
+            stats, act = stats_for(path), model_policy(model)
+            if config.env.normalize and stats is None:
+                raise ConfigError(f"{model_path}: the model's VecNormalize statistics are missing")
+
+        def make_policy(venv: Any, seed: int) -> Policy:
+            return act
+
     first = config.eval_seed if seed is None else seed
-    if model_path is not None and config.env.normalize and stats is None:
-        raise ConfigError(f"{model_path}: the model's VecNormalize statistics are missing")
     if model_path is not None and (
-        first < config.seed + config.env.num_envs and config.seed < first + episodes
+        first < config.seed + config.training_seeds and config.seed < first + episodes
     ):
         raise ConfigError(
             f"seeds {first}..{first + episodes - 1} overlap the training seeds "
-            f"{config.seed}..{config.seed + config.env.num_envs - 1}"
+            f"{config.seed}..{config.seed + config.training_seeds - 1}"
         )
     seeds = list(range(first, first + episodes))
     venv = make_env(config, num_envs=episodes, seed=first, stats=stats)
-    act = baseline_policy(policy, venv, first) if policy else model_policy(model)
-    rows = rollouts(venv, act, seeds)
+    rows = rollouts(venv, make_policy(venv, first), seeds)
     venv.close()
     summary = {"policy": name, "seeds": [first, first + episodes - 1], **summarize(rows)}
     write_results(out, rows, summary)
     if video is not None:
-        record_video(config, stats, policy, model if policy is None else None, first, video)
+        record_video(config, stats, make_policy, first, video)
     if curve and model_path is not None and model_path.is_dir():
         baselines = baselines_for(model_path) or {  # played now on the same games
             baseline: evaluate(
@@ -208,13 +238,15 @@ def write_results(out: Path, rows: list[dict], summary: dict[str, Any]) -> None:
 
 
 def record_video(
-    config: TrainConfig, stats: Path | None, policy: str | None, model: Any, seed: int, path: Path
-) -> None:
-    """The game on ``seed`` as a video (MP4, or GIF by the suffix), the scoreboard in view."""
+    config: AnyConfig, stats: Path | None, make_policy: Callable[[Any, int], Policy], seed: int,
+    path: Path,
+) -> None:  # fmt: skip
+    """The game on ``seed`` as a video (MP4, or GIF by the suffix), the scoreboard in view;
+    ``make_policy(venv, seed)`` gives the player."""
     import imageio.v2 as imageio
 
     venv = make_env(config, num_envs=1, seed=seed, stats=stats, render=True)
-    act = baseline_policy(policy, venv, seed) if policy else model_policy(model)
+    act = make_policy(venv, seed)
     fps = venv.get_attr("metadata")[0]["render_fps"]  # frames per step shown
     stride = max(1, round(fps / 20)) if path.suffix.lower() == ".gif" else 1  # small GIFs
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -255,7 +287,7 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
 
     from agents.train import progress_rows
 
-    config = load_config(run / CONFIG_FILE)
+    config = load_run_config(run)
     rows = [row for row in progress_rows(run) if row.get("rollout/ep_score_mean")]
     if not rows:
         print(f"no learning curve: {run} has no finished training games logged yet")
@@ -282,7 +314,7 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
 def report(run: Path, episodes: int = 100) -> dict[str, Any]:
     """Evaluate a run's model and both baselines on the same seeds; write ``report.json``,
     ``learning_curve.png`` and ``game.gif`` into the run folder."""
-    config = load_config(run / CONFIG_FILE)
+    config = load_run_config(run)
     results = {}
     for name in BASELINES:
         out = run / "eval" / name
@@ -301,7 +333,7 @@ def report(run: Path, episodes: int = 100) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     who = parser.add_mutually_exclusive_group(required=True)
-    who.add_argument("--model", type=Path, help="a run folder or a model zip")
+    who.add_argument("--model", type=Path, help="a run folder or model zip (or RLlib checkpoint)")
     who.add_argument("--policy", choices=BASELINES, help="a baseline")
     parser.add_argument("--table", help="the baselines' table (default: classic)")
     parser.add_argument("--episodes", type=int, default=100, help="games to play")

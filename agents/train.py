@@ -38,7 +38,14 @@ from agents.common import (
     save_model,
     stats_for,
 )
-from agents.config import ConfigError, TrainConfig, algorithm_class, load_config, save_config
+from agents.config import (
+    ConfigError,
+    TrainConfig,
+    algorithm_class,
+    load_config,
+    save_config,
+    sb3_hyperparams,
+)
 
 
 def make_callback(config: TrainConfig, run: Path, frames: int = 0) -> Any:
@@ -164,7 +171,7 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
         try:
             model = algorithm(
                 config.policy, venv, seed=config.seed, device=config.device, verbose=0,
-                **config.hyperparams,
+                **sb3_hyperparams(config),
             )  # fmt: skip
         except (TypeError, ValueError, AssertionError) as error:  # SB3 checks with asserts too
             venv.close()

@@ -221,8 +221,9 @@ class PinballVectorEnv(VectorEnv):
         )
 
     def close_extras(self, **kwargs: Any) -> None:
-        """Stop the threads that step the envs."""
-        self.game.world.threads.close()
+        """Stop the threads that step the envs (none if the constructor refused its options)."""
+        if hasattr(self, "game"):
+            self.game.world.threads.close()
 
     # --- helpers ------------------------------------------------------------------------------
 

@@ -12,10 +12,11 @@ import yaml
 
 from agents import evaluate, train
 from agents.common import atomic_write, latest_checkpoint, save_model
-from agents.config import ConfigError, load_config
+from agents.config import ConfigError, load_config, sb3_hyperparams
 
 ROOT = Path(__file__).resolve().parent.parent
-CONFIGS = sorted((ROOT / "configs" / "agents").glob("*.yaml"))
+# The stable-baselines3 configs (rllib_*.yaml are RLlib's: tests/test_rllib.py).
+CONFIGS = sorted(p for p in (ROOT / "configs" / "agents").glob("*.yaml") if "rllib" not in p.name)
 # Tiny budgets: a few hundred steps, a couple of envs.
 TINY = {
     "ppo": ["hyperparams.n_steps=64", "hyperparams.batch_size=64"],
@@ -188,11 +189,29 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["device=toaster"], "device: not a torch device: 'toaster'"),
         (["seed"], "override 'seed' is not key=value"),
         (["max_minutes=-1"], "max_minutes: must be a number of minutes >= 0"),
+        (["hyperparams.learning_rate=lin_x"], "learning_rate: a schedule is lin_X with X > 0"),
+        (["hyperparams.clip_range=lin_-0.2"], "clip_range: a schedule is lin_X with X > 0"),
     ],
 )
 def test_bad_configs_are_rejected_naming_the_key(overrides, message):
     with pytest.raises(ConfigError, match=message):
         load_config(ROOT / "configs/agents/ppo.yaml", overrides)
+
+
+def test_linear_schedules_decay_to_zero_over_the_run(tmp_path):
+    overrides = ["hyperparams.learning_rate=lin_1e-3", "hyperparams.clip_range=lin_0.2"]
+    hyperparams = sb3_hyperparams(load_config(ROOT / "configs/agents/ppo.yaml", overrides))
+    assert (
+        hyperparams["learning_rate"](1.0) == 1e-3 and hyperparams["learning_rate"](0.25) == 2.5e-4
+    )
+    assert hyperparams["clip_range"](0.5) == 0.1 and hyperparams["gamma"] == 0.995
+    run = tiny_run(
+        ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", *overrides, "total_timesteps=640"
+    )
+    with open(run / "progress.csv") as file:
+        rates = [float(row["train/learning_rate"]) for row in csv.DictReader(file)
+                 if row["train/learning_rate"]]  # fmt: skip
+    assert rates == sorted(rates, reverse=True) and 0 < rates[-1] < rates[0] < 1e-3
 
 
 @pytest.mark.parametrize(

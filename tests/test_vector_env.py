@@ -172,6 +172,13 @@ def test_bad_arguments_and_step_before_reset():
         PinballVectorEnv(num_envs=2).step(np.zeros(2, dtype=np.int64))
 
 
+def test_a_refused_vector_env_closes_cleanly():
+    env = PinballVectorEnv.__new__(PinballVectorEnv)
+    with pytest.raises(ValueError, match="num_envs"):
+        env.__init__(num_envs=0)
+    env.close()  # as garbage collection does: nothing was started, nothing fails
+
+
 def test_render_gives_every_envs_frame():
     env = gym.make_vec("Pinball-v0", num_envs=2, render_mode="rgb_array")
     env.reset(seed=0)

@@ -1,0 +1,473 @@
+"""Train PPO on Ray RLlib from a YAML config: on this machine, or across a Ray cluster.
+
+    python -m agents.rllib --config configs/agents/rllib_ppo.yaml [key=value ...] [--address ADDR]
+    python -m agents.rllib --resume runs/Pinball-v0_rllib-ppo_seed0_20261127-140000
+    python -m agents.rllib --config configs/agents/rllib_ppo.yaml --scaling 1 2 4
+
+Without ``--address`` a local Ray instance is started; with one (``auto``, or ``HOST:6379``)
+the run joins that cluster, and the ``agents`` and ``pinball_env`` packages travel to its nodes
+in the job's ``runtime_env`` (the nodes need the dependencies: ``pip install
+'pinball-env[distributed]'``). The env runners step the native vector env: the env is
+registered with ``ray.tune.registry.register_env`` (which reaches remote actors, where
+Gymnasium's registry does not) and made in RLlib's ``vector_entry_point`` mode.
+
+The run folder has the layout of ``agents.train``: ``config.yaml``, ``meta.json``, TensorBoard
+logs, ``progress.csv`` (the same columns: ``time/total_timesteps``, ``time/frames``,
+``rollout/ep_score_mean``...), checkpoints written atomically every ``checkpoint_every`` env
+steps (``checkpoints/step_N/``, RLlib checkpoint folders) and the final ``model/``.
+``--resume RUN`` goes on from the last checkpoint. ``python -m agents.evaluate --model RUN``
+(or a checkpoint folder) evaluates it like an SB3 model. ``--scaling`` measures sampled env
+steps per second against the number of env runners and writes ``scaling.json``.
+
+Checkpoints hold pickles: load only checkpoints you trust.
+"""
+
+import argparse
+import csv
+import dataclasses
+import json
+import os
+import platform
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from agents.common import CHECKPOINTS, CONFIG_FILE, Policy, run_name
+from agents.config import ConfigError, RllibConfig, load_config, save_config
+
+ENV_NAME = "pinball"  # the env's name in ray.tune's registry
+MODEL_DIR = "model"  # the final checkpoint in a run folder
+RLLIB_CHECKPOINT_FILE = "rllib_checkpoint.json"  # marks an RLlib checkpoint folder
+MODULE_PATH = ("learner_group", "learner", "rl_module", "default_policy")
+FILTER_PATH = ("env_runner", "env_to_module_connector", "MeanStdFilter")
+# The game metrics the env runners log (under env_runners/ in a result).
+SCORE, TRUNCATED, FRAMES = "game_score", "game_truncated", "game_frames_lifetime"
+
+
+def make_env(env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
+    """RLlib's env creator: ``env_config`` holds the env id and its options; with ``num_envs``
+    (RLlib's ``vector_entry_point`` mode) it makes the native vector env."""
+    import pinball_env  # noqa: F401  (registers the ids in this worker)
+
+    options = dict(env_config)
+    env_id = options.pop("id")
+    num_envs = options.pop("num_envs", None)
+    if num_envs is None:
+        options.pop("num_threads", None)
+        return gym.make(env_id, **options)
+    return gym.make_vec(env_id, num_envs, vectorization_mode="vector_entry_point", **options)
+
+
+def record_game(*, episode: Any, metrics_logger: Any, **_: Any) -> None:
+    """RLlib's ``on_episode_end``: log the game's score (not the shaped return), whether the
+    time limit ended it, and its frames."""
+    info = episode.get_infos(-1)
+    metrics_logger.log_value(SCORE, float(info["score"]), window=100)
+    metrics_logger.log_value(TRUNCATED, float(episode.is_truncated), window=100)
+    metrics_logger.log_value(FRAMES, int(info["frames"]), reduce="lifetime_sum")
+
+
+def algorithm_config(config: RllibConfig) -> Any:
+    """RLlib's ``PPOConfig`` for a run config."""
+    from ray.rllib.algorithms.ppo import PPOConfig
+    from ray.rllib.connectors.env_to_module import MeanStdFilter
+    from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+
+    env_config = {"id": config.env.id, "num_threads": config.env_threads, **config.env.make_kwargs}
+    connectors = {}
+    if config.env.normalize:
+        connectors["env_to_module_connector"] = lambda env, spaces, device: MeanStdFilter()
+    return (
+        PPOConfig()
+        .environment(ENV_NAME, env_config=env_config)
+        .env_runners(
+            num_env_runners=config.env_runners,
+            num_envs_per_env_runner=config.env.num_envs,
+            num_cpus_per_env_runner=config.cpus_per_env_runner,
+            gym_env_vectorize_mode="vector_entry_point",
+            **connectors,
+        )
+        .training(**config.hyperparams)
+        .rl_module(model_config=DefaultModelConfig(**config.model))
+        .callbacks(on_episode_end=record_game)
+        .debugging(seed=config.seed, log_level="ERROR")
+    )
+
+
+def init_ray(address: str | None = None, num_cpus: int | None = None) -> None:
+    """Start a local Ray instance, or join the cluster at ``address`` and ship the code to it."""
+    import ray
+    from ray.tune.registry import register_env
+
+    import agents
+    import pinball_env
+
+    if not ray.is_initialized():
+        runtime_env = {}
+        if address is not None:  # the cluster's nodes get this very code
+            modules = [Path(m.__path__[0]) for m in (agents, pinball_env)]
+            runtime_env = {"py_modules": [str(m) for m in modules], "excludes": ["__pycache__"]}
+        ray.init(
+            address=address, num_cpus=num_cpus if address is None else None,
+            runtime_env=runtime_env, include_dashboard=False, log_to_driver=False,
+        )  # fmt: skip
+    register_env(ENV_NAME, make_env)
+
+
+def build(config: RllibConfig, local: bool = False) -> Any:
+    """The RLlib algorithm of a config (Ray must be initialised). On a ``local`` Ray instance
+    (no autoscaler to add nodes), env runners that need more CPUs than it has are an error,
+    not a wait for ever."""
+    import ray
+    import torch
+
+    needed = config.env_runners * config.cpus_per_env_runner
+    cpus = ray.cluster_resources().get("CPU", 0)
+    if local and needed > cpus:
+        raise ConfigError(
+            f"env_runners: {config.env_runners} x cpus_per_env_runner "
+            f"{config.cpus_per_env_runner} needs {needed:g} CPUs, Ray has {cpus:g} here "
+            "(lower cpus_per_env_runner to share them)"
+        )
+    torch.set_num_threads(config.torch_threads)
+    try:
+        return algorithm_config(config).build_algo()
+    except ValueError as error:  # RLlib's own validation of the settings
+        raise ConfigError(f"RLlib rejects the config: {error}") from None
+
+
+def checkpoints_of(run: Path) -> list[tuple[int, Path]]:
+    """``(steps, folder)`` of each complete checkpoint of a run, oldest first."""
+    found = []
+    for path in (run / CHECKPOINTS).glob("step_*"):
+        steps = path.name.removeprefix("step_")
+        if steps.isdigit() and (path / RLLIB_CHECKPOINT_FILE).is_file():
+            found.append((int(steps), path))
+    return sorted(found)
+
+
+def save_checkpoint(algo: Any, path: Path) -> None:
+    """Save the algorithm into the folder ``path``: written beside it, then renamed into place,
+    so a run killed mid-write never leaves half a checkpoint under the name."""
+    temporary = path.with_name(f".{path.name}.tmp")
+    shutil.rmtree(temporary, ignore_errors=True)
+    algo.save_to_path(str(temporary.resolve()))
+    if path.exists():  # the final model, saved again on resume
+        old = path.with_name(f".{path.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        path.rename(old)
+        temporary.rename(path)
+        shutil.rmtree(old)
+    else:
+        temporary.rename(path)
+
+
+def start(config: RllibConfig, runs: Path, command: list[str]) -> Path:
+    """Create a run folder with the config and meta data; returns it."""
+    import ray
+    import torch
+
+    import pinball_env
+
+    run = runs / run_name(config, time.strftime("%Y%m%d-%H%M%S"))
+    if run.exists():
+        raise ConfigError(f"run folder {run} exists already")
+    (run / CHECKPOINTS).mkdir(parents=True)
+    save_config(config, run / CONFIG_FILE)
+    meta = {
+        "pinball_env": pinball_env.__version__,
+        "ray": ray.__version__,
+        "torch": torch.__version__,
+        "gymnasium": gym.__version__,
+        "python": platform.python_version(),
+        "command": command,
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
+    }
+    (run / "meta.json").write_text(json.dumps(meta, indent=1))
+    return run
+
+
+def progress_row(result: dict[str, Any], elapsed: float) -> dict[str, Any]:
+    """A training iteration's result as a ``progress.csv`` row (agents.train's column names)."""
+    runners = result.get("env_runners", {})
+    learner = result.get("learners", {}).get("default_policy", {})
+    row = {
+        "time/total_timesteps": int(result["num_env_steps_sampled_lifetime"]),
+        "time/frames": int(runners.get(FRAMES, 0)),
+        "time/iterations": int(result["training_iteration"]),
+        "time/time_elapsed": round(elapsed, 3),
+        "time/fps": round(runners.get("num_env_steps_sampled", 0) / result["time_this_iter_s"]),
+        "rollout/ep_score_mean": runners.get(SCORE, ""),
+        "rollout/ep_truncated": runners.get(TRUNCATED, ""),
+        "rollout/ep_rew_mean": runners.get("episode_return_mean", ""),
+        "rollout/ep_len_mean": runners.get("episode_len_mean", ""),
+    }
+    for key in ("policy_loss", "vf_loss", "entropy", "mean_kl_loss", "vf_explained_var"):
+        row[f"train/{key}"] = learner.get(key, "")
+    return {key: (float(value) if isinstance(value, np.floating) else value)
+            for key, value in row.items()}  # fmt: skip
+
+
+class ProgressLog:
+    """``progress.csv`` (appended on resume) and TensorBoard scalars of a run."""
+
+    def __init__(self, run: Path) -> None:
+        from torch.utils.tensorboard import SummaryWriter
+
+        self.path = run / "progress.csv"
+        self.writer = SummaryWriter(str(run))
+        self.fields: list[str] | None = None
+        if self.path.is_file():
+            with open(self.path) as file:
+                self.fields = next(csv.reader(file), None)
+
+    def write(self, row: dict[str, Any]) -> None:
+        new = self.fields is None
+        self.fields = self.fields or list(row)
+        with open(self.path, "a", newline="") as file:
+            writer = csv.DictWriter(file, fieldnames=self.fields, extrasaction="ignore")
+            if new:
+                writer.writeheader()
+            writer.writerow(row)
+        steps = row["time/total_timesteps"]
+        for key, value in row.items():
+            if isinstance(value, (int, float)) and key != "time/total_timesteps":
+                self.writer.add_scalar(key, value, steps)
+        self.writer.flush()
+
+    def close(self) -> None:
+        self.writer.close()
+
+
+def train(
+    config: RllibConfig, run: Path, resume: bool = False, progress_bar: bool = True,
+    local: bool = True,
+) -> Path:  # fmt: skip
+    """Train (or go on training) in ``run``; returns the final checkpoint's folder. Ray must be
+    initialised (``init_ray``); ``local``: a Ray instance of this machine only."""
+    from tqdm import tqdm
+
+    checkpoint = checkpoints_of(run)[-1] if resume and checkpoints_of(run) else None
+    if resume and checkpoint is None:
+        raise ConfigError(f"{run}: no checkpoint to resume from")
+    algo = build(config, local)
+    if checkpoint is not None:
+        print(f"resuming {run} from {checkpoint[1].name} ({checkpoint[0]} steps)")
+        algo.restore_from_path(str(checkpoint[1].resolve()))
+    log = ProgressLog(run)
+    steps = checkpoint[0] if checkpoint else 0
+    every = config.checkpoint_every
+    next_checkpoint = (steps // every + 1) * every if every else 0
+    began = time.monotonic()
+    bar = tqdm(total=config.total_timesteps, initial=steps, unit="step", disable=not progress_bar)
+    try:
+        while steps < config.total_timesteps:
+            result = algo.train()
+            row = progress_row(result, time.monotonic() - began)
+            bar.update(row["time/total_timesteps"] - steps)
+            steps = row["time/total_timesteps"]
+            if row["rollout/ep_score_mean"] != "":
+                bar.set_postfix(score=f"{row['rollout/ep_score_mean']:.0f}")
+            log.write(row)
+            if next_checkpoint and steps >= next_checkpoint:
+                save_checkpoint(algo, run / CHECKPOINTS / f"step_{steps}")
+                next_checkpoint = (steps // every + 1) * every
+            if config.max_minutes and time.monotonic() - began > 60.0 * config.max_minutes:
+                break
+        # The last checkpoint is the final model, so a resume goes on from it.
+        if not (run / CHECKPOINTS / f"step_{steps}").exists():
+            save_checkpoint(algo, run / CHECKPOINTS / f"step_{steps}")
+        save_checkpoint(algo, run / MODEL_DIR)
+    finally:
+        bar.close()
+        log.close()
+        algo.stop()
+    return run / MODEL_DIR
+
+
+def sample_steps(algo: Any, steps: int) -> tuple[int, float]:
+    """Let every env runner (the driver's own if there are none) sample ``steps`` env steps at
+    once, as training does; returns the steps sampled and the wall time it took."""
+    group = algo.env_runner_group
+    remote = group.num_remote_env_runners() > 0
+    began = time.perf_counter()
+    counts = group.foreach_env_runner(
+        lambda runner: sum(len(episode) for episode in runner.sample(num_timesteps=steps)),
+        local_env_runner=not remote,
+    )
+    return sum(counts), time.perf_counter() - began
+
+
+def scaling(config: RllibConfig, runners: list[int], iterations: int, out: Path) -> list[dict]:
+    """Env steps per second for each number of env runners, the same config each time (after
+    one training iteration to warm up): sampling alone (``iterations`` rounds of a training
+    batch split between the runners) and whole training iterations (sampling and learning).
+    Returns the rows, also written to ``out``."""
+    import ray
+
+    rows = []
+    cpus = ray.cluster_resources().get("CPU", 1)
+    batch = config.hyperparams.get("train_batch_size_per_learner", 4000)
+    for count in runners:
+        # More runners than CPUs share them (Ray would otherwise wait for CPUs for ever).
+        share = min(config.cpus_per_env_runner, cpus / count) if count else 1
+        algo = build(dataclasses.replace(config, env_runners=count, cpus_per_env_runner=share))
+        try:
+            before = algo.train()["num_env_steps_sampled_lifetime"]  # compile, connect, warm up
+            began = time.perf_counter()
+            for _ in range(iterations):
+                result = algo.train()
+            train_time = time.perf_counter() - began
+            trained = int(result["num_env_steps_sampled_lifetime"] - before)
+            # Then sampling alone (after training: its steps would count in the results).
+            sampled, sample_time = 0, 0.0
+            for _ in range(iterations):
+                steps, seconds = sample_steps(algo, -(-batch // max(count, 1)))
+                sampled, sample_time = sampled + steps, sample_time + seconds
+        finally:
+            algo.stop()
+        row = {
+            "env_runners": count,
+            "envs_per_runner": config.env.num_envs,
+            "cpus_per_runner": round(share, 3),
+            "steps": sampled,
+            "sampled_steps_per_s": round(sampled / sample_time),
+            "steps_per_s_with_learning": round(trained / train_time),
+        }
+        print(json.dumps(row))
+        rows.append(row)
+    info = {
+        "cpus": os.cpu_count(),
+        "ray": ray.__version__,
+        "iterations": iterations,
+        "train_batch_size_per_learner": config.hyperparams.get("train_batch_size_per_learner"),
+        "rows": rows,
+    }
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(info, indent=1))
+    print("| env runners | envs each | sampled env steps/s | with learning |")
+    print("|---|---|---|---|")
+    for row in rows:
+        cells = (row["env_runners"], row["envs_per_runner"], row["sampled_steps_per_s"],
+                 row["steps_per_s_with_learning"])  # fmt: skip
+        print("| {} | {} | {:,} | {:,} |".format(*cells))
+    print(f"-> {out}")
+    return rows
+
+
+def is_checkpoint(path: Path) -> bool:
+    """Whether ``path`` is an RLlib run folder (with its final model) or checkpoint folder."""
+    return (path / RLLIB_CHECKPOINT_FILE).is_file() or (
+        path / MODEL_DIR / RLLIB_CHECKPOINT_FILE
+    ).is_file()
+
+
+def load_checkpoint(path: Path) -> tuple[Path, RllibConfig]:
+    """The checkpoint folder and the run's config of an RLlib run folder or checkpoint."""
+    checkpoint = path if (path / RLLIB_CHECKPOINT_FILE).is_file() else path / MODEL_DIR
+    run = next((p for p in (checkpoint.parent, checkpoint.parent.parent)
+                if (p / CONFIG_FILE).is_file()), None)  # fmt: skip
+    if run is None:
+        raise ConfigError(f"{path}: no {CONFIG_FILE} in the run folder: cannot rebuild its env")
+    return checkpoint, load_config(run / CONFIG_FILE, kind=RllibConfig)
+
+
+def checkpoint_policy(checkpoint: Path) -> Policy:
+    """The greedy policy of an RLlib checkpoint over raw observations: its observation filter
+    (the running mean and std it trained with, frozen) and its RL module, in this process."""
+    import torch
+    from ray.rllib.core.columns import Columns
+    from ray.rllib.core.rl_module.rl_module import RLModule
+    from ray.rllib.utils.filter import RunningStat
+
+    module = RLModule.from_checkpoint(str(checkpoint.joinpath(*MODULE_PATH).resolve()))
+    module.eval()
+    normalise = None
+    filter_path = checkpoint.joinpath(*FILTER_PATH)
+    if filter_path.is_dir():
+        from ray.rllib.connectors.env_to_module import MeanStdFilter
+
+        trained = MeanStdFilter()  # as the env runners made it; then their spaces
+        trained.input_action_space = module.action_space
+        trained.input_observation_space = module.observation_space
+        trained.restore_from_path(str(filter_path.resolve()))
+        state = trained.get_state()[None]
+        stat = RunningStat.from_state(state["running_stats"][0])
+        mean, std, clip = stat.mean, stat.std, state["clip_by_value"]
+
+        def normalise(obs: np.ndarray) -> np.ndarray:  # RLlib's MeanStdFilter, not updated
+            scaled = (obs - mean) / (std + 1e-8) if state["de_std_to_one"] else obs - mean
+            return np.clip(scaled, -clip, clip) if clip else scaled
+
+    def act(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
+        if normalise is not None:
+            obs = normalise(obs)
+        with torch.no_grad():
+            out = module.forward_inference({Columns.OBS: torch.as_tensor(obs, dtype=torch.float32)})
+        return out[Columns.ACTION_DIST_INPUTS].argmax(dim=-1).numpy()
+
+    return act
+
+
+def main(argv: list[str] | None = None) -> Path | list[dict]:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--config", type=Path, help="a YAML config (configs/agents/rllib_*.yaml)")
+    parser.add_argument("overrides", nargs="*", help="key=value settings over the config")
+    parser.add_argument("--resume", type=Path, metavar="RUN", help="a run folder to go on with")
+    parser.add_argument("--address", help="a Ray cluster to join (auto, or HOST:PORT)")
+    parser.add_argument("--runs", type=Path, default=Path("runs"), help="where run folders go")
+    parser.add_argument("--report", action="store_true", help="evaluate and report at the end")
+    parser.add_argument("--episodes", type=int, default=100, help="games for --report")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--scaling", type=int, nargs="+", metavar="RUNNERS",
+                        help="measure sampled steps/s with these env runner counts")  # fmt: skip
+    parser.add_argument("--iterations", type=int, default=3, help="iterations per --scaling row")
+    parser.add_argument("--out", type=Path, default=Path("runs/scaling.json"),
+                        help="where --scaling writes its JSON")  # fmt: skip
+    args = parser.parse_args(argv)
+    try:
+        if args.resume is not None:
+            if args.config is not None or args.overrides or args.scaling:
+                raise ConfigError("--resume goes on with the run's own config: give nothing else")
+            if not (args.resume / CONFIG_FILE).is_file():
+                raise ConfigError(f"{args.resume}: not a run folder (no {CONFIG_FILE})")
+            run = args.resume
+            config = load_config(run / CONFIG_FILE, kind=RllibConfig)
+            if not checkpoints_of(run):
+                raise ConfigError(f"{run}: no checkpoint to resume from")
+        elif args.config is None:
+            raise ConfigError("give --config FILE (or --resume RUN)")
+        else:
+            config = load_config(args.config, args.overrides, kind=RllibConfig)
+        if args.scaling and min(args.scaling) < 0:
+            raise ConfigError(f"--scaling: env runner counts must be >= 0, got {args.scaling}")
+        init_ray(args.address)
+        if args.scaling:
+            return scaling(config, args.scaling, args.iterations, args.out)
+        if args.resume is None:
+            run = start(config, args.runs, sys.argv if argv is None else argv)
+        print(f"run folder: {run}")
+        try:
+            resume, progress = args.resume is not None, not args.no_progress
+            model = train(config, run, resume, progress, local=args.address is None)
+        except ConfigError:
+            if args.resume is None:  # nothing was trained: leave no run folder behind
+                shutil.rmtree(run)
+            raise
+    except ConfigError as error:
+        parser.exit(2, f"error: {error}\n")
+    print(f"model: {model}")
+    if args.report:
+        from agents.evaluate import report
+
+        report(run, episodes=args.episodes)
+    return model
+
+
+if __name__ == "__main__":
+    main()
