@@ -1,9 +1,13 @@
 """What training and evaluation share: the env chain a config describes, run folders, and
 atomic writes."""
 
+import importlib
+import json
 import os
+import platform
 import re
 import tempfile
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -12,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
-from agents.config import AnyConfig, TrainConfig
+from agents.config import AnyConfig, ConfigError, TrainConfig, save_config
 from pinball_env.heuristic import HeuristicPolicy
 from pinball_env.wrappers import SB3VecEnv
 
@@ -94,6 +98,28 @@ def run_name(config: AnyConfig, when: str) -> str:
     """A run folder's name: env, algorithm (``rllib-ppo`` for RLlib), seed and start time."""
     env = config.env.id.replace("/", "-")
     return f"{env}_{config.label}_seed{config.seed}_{when}"
+
+
+def start_run(config: AnyConfig, runs: Path, command: list[str], libraries: list[str]) -> Path:
+    """Create a run folder (named by ``run_name``) with the exact config and ``meta.json``: the
+    versions of pinball_env, gymnasium, torch and ``libraries``, the command, the start time."""
+    run = runs / run_name(config, time.strftime("%Y%m%d-%H%M%S"))
+    if run.exists():
+        raise ConfigError(f"run folder {run} exists already")
+    (run / CHECKPOINTS).mkdir(parents=True)
+    save_config(config, run / CONFIG_FILE)
+    versions = {
+        name: importlib.import_module(name).__version__
+        for name in ("pinball_env", "gymnasium", "torch", *libraries)
+    }
+    meta = {
+        **versions,
+        "python": platform.python_version(),
+        "command": command,
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
+    }
+    (run / "meta.json").write_text(json.dumps(meta, indent=1))
+    return run
 
 
 def atomic_write(path: Path, write: Callable[[Any], None]) -> None:

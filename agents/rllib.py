@@ -27,7 +27,6 @@ import csv
 import dataclasses
 import json
 import os
-import platform
 import shutil
 import sys
 import time
@@ -37,8 +36,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.common import CHECKPOINTS, CONFIG_FILE, Policy, run_name
-from agents.config import ConfigError, RllibConfig, load_config, save_config
+from agents.common import CHECKPOINTS, CONFIG_FILE, Policy, start_run
+from agents.config import ConfigError, RllibConfig, load_config
 
 ENV_NAME = "pinball"  # the env's name in ray.tune's registry
 MODEL_DIR = "model"  # the final checkpoint in a run folder
@@ -169,27 +168,7 @@ def save_checkpoint(algo: Any, path: Path) -> None:
 
 def start(config: RllibConfig, runs: Path, command: list[str]) -> Path:
     """Create a run folder with the config and meta data; returns it."""
-    import ray
-    import torch
-
-    import pinball_env
-
-    run = runs / run_name(config, time.strftime("%Y%m%d-%H%M%S"))
-    if run.exists():
-        raise ConfigError(f"run folder {run} exists already")
-    (run / CHECKPOINTS).mkdir(parents=True)
-    save_config(config, run / CONFIG_FILE)
-    meta = {
-        "pinball_env": pinball_env.__version__,
-        "ray": ray.__version__,
-        "torch": torch.__version__,
-        "gymnasium": gym.__version__,
-        "python": platform.python_version(),
-        "command": command,
-        "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
-    }
-    (run / "meta.json").write_text(json.dumps(meta, indent=1))
-    return run
+    return start_run(config, runs, command, ["ray"])
 
 
 def progress_row(result: dict[str, Any], elapsed: float) -> dict[str, Any]:

@@ -18,8 +18,6 @@ Models are pickles inside zips: load only models you trust.
 import argparse
 import collections
 import csv
-import json
-import platform
 import shutil
 import sys
 import time
@@ -34,8 +32,8 @@ from agents.common import (
     MODEL_FILE,
     latest_checkpoint,
     make_env,
-    run_name,
     save_model,
+    start_run,
     stats_for,
 )
 from agents.config import (
@@ -43,7 +41,6 @@ from agents.config import (
     TrainConfig,
     algorithm_class,
     load_config,
-    save_config,
     sb3_hyperparams,
 )
 
@@ -121,26 +118,7 @@ def set_threads(config: TrainConfig) -> None:
 
 def start(config: TrainConfig, runs: Path, command: list[str]) -> Path:
     """Create a run folder with the config and meta data; returns it."""
-    import stable_baselines3
-    import torch
-
-    import pinball_env
-
-    run = runs / run_name(config, time.strftime("%Y%m%d-%H%M%S"))
-    if run.exists():
-        raise ConfigError(f"run folder {run} exists already")
-    (run / CHECKPOINTS).mkdir(parents=True)
-    save_config(config, run / CONFIG_FILE)
-    meta = {
-        "pinball_env": pinball_env.__version__,
-        "stable_baselines3": stable_baselines3.__version__,
-        "torch": torch.__version__,
-        "python": platform.python_version(),
-        "command": command,
-        "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
-    }
-    (run / "meta.json").write_text(json.dumps(meta, indent=1))
-    return run
+    return start_run(config, runs, command, ["stable_baselines3"])
 
 
 def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bool = True) -> Path:
