@@ -130,7 +130,8 @@ class RllibConfig:
     max_minutes: float = 0.0
     """Wall-clock limit [min] (0: none), checked after each training iteration."""
     seed: int = 0
-    """Seed of the algorithm; env runner k first resets its env i with seed + k + i."""
+    """Seed of the algorithm; env i of env runner k (0: the driver's) first resets with
+    seed + k * num_envs + i."""
     env_runners: int = 2
     """Remote env runner actors (``num_env_runners``; 0: sample in the driver)."""
     cpus_per_env_runner: float = 1.0
@@ -164,7 +165,7 @@ class RllibConfig:
     @property
     def training_seeds(self) -> int:
         """How many seeds from ``seed`` on the training games start from."""
-        return self.env_runners + self.env.num_envs
+        return (self.env_runners + 1) * self.env.num_envs
 
 
 AnyConfig = TrainConfig | RllibConfig

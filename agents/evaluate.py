@@ -180,7 +180,7 @@ def evaluate(
         if rllib.is_checkpoint(model_path):
             checkpoint, config = rllib.load_checkpoint(model_path)
             torch.set_num_threads(config.torch_threads)
-            act = rllib.checkpoint_policy(checkpoint)  # applies its own observation filter
+            act = rllib.checkpoint_policy(checkpoint, config)  # applies its own observation filter
             config = dataclasses.replace(
                 config, env=dataclasses.replace(config.env, normalize=False)
             )

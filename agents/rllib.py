@@ -54,17 +54,34 @@ def make_env(env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
     import pinball_env  # noqa: F401  (registers the ids in this worker)
 
     options = dict(env_config)
-    env_id = options.pop("id")
+    env_id, first_seed = options.pop("id"), options.pop("seed")
     num_envs = options.pop("num_envs", None)
     if num_envs is None:
         options.pop("num_threads", None)
         return gym.make(env_id, **options)
-    return gym.make_vec(env_id, num_envs, vectorization_mode="vector_entry_point", **options)
+    env = gym.make_vec(env_id, num_envs, vectorization_mode="vector_entry_point", **options)
+    return SeedBlocks(env, first_seed)
+
+
+class SeedBlocks(gym.vector.VectorWrapper):
+    """RLlib resets env runner k's vector env with seed + k, and the vector env seeds its env i
+    with that + i: neighbouring runners would share all but one game stream. This gives runner
+    k the block seed + k * num_envs + i instead."""
+
+    def __init__(self, env: gym.vector.VectorEnv, first_seed: int) -> None:
+        super().__init__(env)
+        self.first_seed = first_seed
+
+    def reset(self, *, seed: Any = None, options: Any = None) -> Any:
+        if isinstance(seed, int):
+            seed = self.first_seed + (seed - self.first_seed) * self.num_envs
+        return self.env.reset(seed=seed, options=options)
 
 
 def record_game(*, episode: Any, metrics_logger: Any, **_: Any) -> None:
     """RLlib's ``on_episode_end``: log the game's score (not the shaped return), whether the
-    time limit ended it, and its frames."""
+    time limit ended it, and its frames. (RLlib reduces the means over the games that ended in
+    each iteration.)"""
     info = episode.get_infos(-1)
     metrics_logger.log_value(SCORE, float(info["score"]), window=100)
     metrics_logger.log_value(TRUNCATED, float(episode.is_truncated), window=100)
@@ -77,7 +94,10 @@ def algorithm_config(config: RllibConfig) -> Any:
     from ray.rllib.connectors.env_to_module import MeanStdFilter
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
 
-    env_config = {"id": config.env.id, "num_threads": config.env_threads, **config.env.make_kwargs}
+    env_config = {
+        "id": config.env.id, "seed": config.seed, "num_threads": config.env_threads,
+        **config.env.make_kwargs,
+    }  # fmt: skip
     connectors = {}
     if config.env.normalize:
         connectors["env_to_module_connector"] = lambda env, spaces, device: MeanStdFilter()
@@ -136,7 +156,7 @@ def build(config: RllibConfig, local: bool = False) -> Any:
     torch.set_num_threads(config.torch_threads)
     try:
         return algorithm_config(config).build_algo()
-    except ValueError as error:  # RLlib's own validation of the settings
+    except (ValueError, TypeError) as error:  # RLlib's own checks of the settings
         raise ConfigError(f"RLlib rejects the config: {error}") from None
 
 
@@ -356,13 +376,14 @@ def load_checkpoint(path: Path) -> tuple[Path, RllibConfig]:
     return checkpoint, load_config(run / CONFIG_FILE, kind=RllibConfig)
 
 
-def checkpoint_policy(checkpoint: Path) -> Policy:
+def checkpoint_policy(checkpoint: Path, trained_config: RllibConfig) -> Policy:
     """The greedy policy of an RLlib checkpoint over raw observations: its observation filter
     (the running mean and std it trained with, frozen) and its RL module, in this process."""
     import torch
     from ray.rllib.core.columns import Columns
     from ray.rllib.core.rl_module.rl_module import RLModule
     from ray.rllib.utils.filter import RunningStat
+    from ray.rllib.utils.numpy import SMALL_NUMBER
 
     module = RLModule.from_checkpoint(str(checkpoint.joinpath(*MODULE_PATH).resolve()))
     module.eval()
@@ -380,8 +401,13 @@ def checkpoint_policy(checkpoint: Path) -> Policy:
         mean, std, clip = stat.mean, stat.std, state["clip_by_value"]
 
         def normalise(obs: np.ndarray) -> np.ndarray:  # RLlib's MeanStdFilter, not updated
-            scaled = (obs - mean) / (std + 1e-8) if state["de_std_to_one"] else obs - mean
+            scaled = obs - mean if state["de_mean_to_zero"] else obs
+            if state["de_std_to_one"]:
+                scaled = scaled / (std + SMALL_NUMBER)
             return np.clip(scaled, -clip, clip) if clip else scaled
+
+    elif trained_config.env.normalize:
+        raise ConfigError(f"{checkpoint}: its observation filter (MeanStdFilter) is missing")
 
     def act(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
         if normalise is not None:
@@ -423,6 +449,8 @@ def main(argv: list[str] | None = None) -> Path | list[dict]:
             raise ConfigError("give --config FILE (or --resume RUN)")
         else:
             config = load_config(args.config, args.overrides, kind=RllibConfig)
+        if args.iterations < 1:
+            raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
         if args.scaling and min(args.scaling) < 0:
             raise ConfigError(f"--scaling: env runner counts must be >= 0, got {args.scaling}")
         init_ray(args.address)

@@ -63,6 +63,10 @@ def test_env_runners_on_a_worker_node_sample_and_learn(no_ray):
             # Both packages came with the job (runtime_env), as a node without a checkout needs.
             shipped = runners.foreach_env_runner(shipped_packages, local_env_runner=False)
             assert shipped == [{"agents", "pinball_env"}] * 2
+            kinds = runners.foreach_env_runner(
+                lambda runner: type(runner.env.unwrapped).__name__, local_env_runner=False
+            )
+            assert kinds == ["PinballVectorEnv"] * 2  # each steps one native vector env
             result = algo.train()
         finally:
             algo.stop()
@@ -131,7 +135,7 @@ def test_the_policy_sees_observations_as_training_normalised_them(tmp_path, no_r
     rllib.main(["--config", str(CONFIG), *TINY, "env_runners=0", "total_timesteps=200",
                 "--runs", str(runs), "--no-progress"])  # fmt: skip
     (run,) = runs.iterdir()
-    checkpoint, _ = rllib.load_checkpoint(run)
+    checkpoint, trained = rllib.load_checkpoint(run)
     seen = []
     load = RLModule.from_checkpoint
 
@@ -143,14 +147,25 @@ def test_the_policy_sees_observations_as_training_normalised_them(tmp_path, no_r
 
     monkeypatch.setattr(RLModule, "from_checkpoint", spied)
     obs = np.random.default_rng(0).normal(size=(3, 10)).astype(np.float32)
-    actions = rllib.checkpoint_policy(checkpoint)(obs, [{}] * 3)
+    actions = rllib.checkpoint_policy(checkpoint, trained)(obs, [{}] * 3)
     assert actions.shape == (3,) and set(actions) <= {0, 1, 2, 3}
     state_file = checkpoint.joinpath(*rllib.FILTER_PATH) / "state.pkl"
     state = pickle.loads(state_file.read_bytes())[None]
     stat = RunningStat.from_state(state["running_stats"][0])
     assert stat.n >= 200  # the observations of the training games
-    expected = np.clip((obs - stat.mean) / (stat.std + 1e-8), -10, 10)
+    expected = np.clip((obs - stat.mean) / (stat.std + 1e-6), -10, 10)  # RLlib's SMALL_NUMBER
     np.testing.assert_allclose(seen[0], expected, rtol=1e-5)
+
+
+def test_each_env_runner_plays_its_own_block_of_seeds():
+    env = rllib.make_env({"id": "Pinball-v0", "seed": 10, "num_envs": 4, "max_episode_steps": None})
+    assert type(env.unwrapped).__name__ == "PinballVectorEnv"  # the native vector env
+    seen = []
+    reset = env.env.reset
+    env.env.reset = lambda seed=None, options=None: seen.append(seed) or reset(seed=seed)
+    for runner in range(3):  # RLlib resets runner k with seed + k
+        env.reset(seed=10 + runner)
+    assert seen == [10, 14, 18]  # games 10-13, 14-17, 18-21: no stream shared
 
 
 def test_a_checkpoint_write_killed_midway_leaves_no_checkpoint(tmp_path):
@@ -187,7 +202,7 @@ def test_a_checkpoint_write_killed_midway_leaves_no_checkpoint(tmp_path):
         (["algo=dqn"], "algo: unknown algorithm 'dqn'"),
         (["env.kwargs.obs_type=grayscale"], "obs_type: RLlib runs train on state observations"),
         (["env.frame_stack=4"], "env.frame_stack: RLlib runs do not stack frames"),
-        (["eval_seed=17"], r"eval_seed: 17 overlaps the training seeds 0..17"),
+        (["eval_seed=47"], r"eval_seed: 47 overlaps the training seeds 0..47"),
         (["env.kwargs.table=nowhere"], "env.kwargs: unknown table 'nowhere'"),
         (["policy=MlpPolicy"], r"a stable-baselines3 config.*agents\.train"),
     ],
