@@ -212,6 +212,22 @@ def progress_row(result: dict[str, Any], elapsed: float) -> dict[str, Any]:
             for key, value in row.items()}  # fmt: skip
 
 
+def forget_progress_after(path: Path, steps: int) -> None:
+    """Drop the rows a killed run logged after its last checkpoint: the resume logs them
+    again, from the checkpoint on."""
+    if not path.is_file():
+        return
+    with open(path, newline="") as file:
+        rows = list(csv.DictReader(file))
+    if not rows:
+        return
+    kept = [row for row in rows if int(row["time/total_timesteps"]) <= steps]
+    with open(path, "w", newline="") as file:
+        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(kept)
+
+
 class ProgressLog:
     """``progress.csv`` (appended on resume) and TensorBoard scalars of a run."""
 
@@ -258,8 +274,10 @@ def train(
     if checkpoint is not None:
         print(f"resuming {run} from {checkpoint[1].name} ({checkpoint[0]} steps)")
         algo.restore_from_path(str(checkpoint[1].resolve()))
-    log = ProgressLog(run)
     steps = checkpoint[0] if checkpoint else 0
+    if checkpoint is not None:
+        forget_progress_after(run / "progress.csv", steps)
+    log = ProgressLog(run)
     every = config.checkpoint_every
     next_checkpoint = (steps // every + 1) * every if every else 0
     began = time.monotonic()

@@ -101,6 +101,8 @@ def test_train_resume_and_evaluate_from_the_command_line(tmp_path, no_ray):
     # Resumed with a bigger budget: the step count goes on from the last checkpoint.
     config = (run / "config.yaml").read_text()
     (run / "config.yaml").write_text(config.replace("total_timesteps: 500", "total_timesteps: 900"))
+    with open(run / "progress.csv", "a") as file:  # as if logged after the last checkpoint
+        file.write(f"{10**9}" + ",0" * 13 + "\n")
     ray.shutdown()
     rllib.main(["--resume", str(run), "--no-progress"])
     with open(run / "progress.csv") as file:
