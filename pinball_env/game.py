@@ -17,9 +17,11 @@ import numpy as np
 from numba import njit
 
 from pinball_env.backends import make_world
-from pinball_env.physics import State
+from pinball_env.physics import State, first_flipper
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.step import step_ball
 from pinball_env.table import BUTTONS, Table, check_ball_state
+from pinball_env.world import compiled_entry
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
 # real ball rarely exceeds 10 m/s on a table (a full flip at the tip gives about 5 m/s).
@@ -62,6 +64,44 @@ class GameState(NamedTuple):
     anchor: np.ndarray  # (N, 2) float64: where the ball was when it last moved a radius [m]
     still_frames: np.ndarray  # (N,) int64: frames since then (see BALL_SEARCH_TIME)
     frames: np.ndarray  # (N,) int64: frames played in the current game
+
+
+class Rules(NamedTuple):
+    """What the compiled step loop plays by (see :class:`Game`); arrays are per env."""
+
+    reward_scale: float
+    drain_penalty: float
+    height_shaping: float
+    heights: np.ndarray  # (N,) float64: table heights [m]
+    skip_heights: np.ndarray  # (N,) float64: skip_above in metres
+    frame_skip: int
+    skip_frames: int  # most frames run on while the ball is high (0: skip_above is off)
+    max_frames: int  # frames a game lasts (-1: no limit)
+    search_frames: int  # still frames before a ball search
+    radius: float  # the ball's [m]
+    scores: np.ndarray  # (N, elements) int64: points per element id
+
+
+class StepProgress(NamedTuple):
+    """Where each env is in the current step: the compiled loop hands it back to Python for a
+    launch and takes it up again where it stopped."""
+
+    stage: np.ndarray  # (N,) int64: what comes next (NEW_STEP ... STEP_DONE)
+    frames: np.ndarray  # (N,) int64: frames played in this step
+    reward: np.ndarray  # (N,) float64: summed over the step's frames
+    points: np.ndarray  # (N,) int64: summed over the step's frames
+    drained: np.ndarray  # (N,) bool: a ball drained in the step
+    height_before: np.ndarray  # (N,) float64: the ball's height when the frame began [m]
+    frame_points: np.ndarray  # (N,) int64: points of the frame under way
+    frame_drained: np.ndarray  # (N,) bool: the frame under way drained a ball
+    launch: np.ndarray  # (N,) bool: waits for a ball off the plunger before it goes on
+    finite: np.ndarray  # (N,) bool: the ball state stayed finite
+
+
+# A step's stages, per env: its start, then per frame: the next frame chosen (or the step
+# ended), its physics, its points and drains, the ball search, its reward (a launch may come
+# between the last three).
+NEW_STEP, NEXT_FRAME, PHYSICS, AFTER_PHYSICS, SEARCH, CLOSE_FRAME, STEP_DONE = range(7)
 
 
 class Game:
@@ -151,8 +191,18 @@ class Game:
             frames=np.zeros(n_envs, dtype=np.int64),
         )
         self._everyone = np.ones(n_envs, dtype=bool)
-        self._released = np.zeros(  # the actions that hold no button
-            n_envs if action_type == "discrete" else (n_envs, len(BUTTONS)), dtype=np.int64
+        self._play: Any = None  # _play_frames's compiled entry (see compiled_entry)
+        self._progress = StepProgress(
+            stage=np.zeros(n_envs, dtype=np.int64),
+            frames=np.zeros(n_envs, dtype=np.int64),
+            reward=np.zeros(n_envs),
+            points=np.zeros(n_envs, dtype=np.int64),
+            drained=np.zeros(n_envs, dtype=bool),
+            height_before=np.zeros(n_envs),
+            frame_points=np.zeros(n_envs, dtype=np.int64),
+            frame_drained=np.zeros(n_envs, dtype=bool),
+            launch=np.zeros(n_envs, dtype=bool),
+            finite=np.ones(n_envs, dtype=bool),
         )
         self.ball_search_frames = round(BALL_SEARCH_TIME * table.simulation.frame_rate)
         # Per env (rows), for set_table: the flippers' rest angles, the sign of their upstroke
@@ -182,6 +232,11 @@ class Game:
         self._width[env] = table.width
         self._height[env] = table.height
         self._scoring[env] = np.flatnonzero(table.element_scores)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_play"] = None  # a compiled entry cannot be pickled; a copy finds its own
+        return state
 
     @property
     def n_envs(self) -> int:
@@ -292,40 +347,41 @@ class Game:
         rest of the step. Envs where ``frozen`` (n_envs,) bool is set keep their state as it is
         (a vector env's envs that have just been reset), with reward 0.
 
+        Each env's frames run in one compiled loop (:func:`_play_frames`), which comes back
+        here only for launches (they draw from the env's random stream), and, with a physics
+        backend other than the swept kernel, for each frame's physics.
+
         Returns ``(reward, game_over)``, (n_envs,) float64 and bool, the reward summed over the
         frames. The step's points and drains (summed) are in :attr:`state`.
         """
-        if self.frame_skip == 1 and not self.skip_above and self.max_frames is None:
-            return self.step_frame(actions, rngs, frozen)
-        state = self.state
-        still = np.zeros(self.n_envs, dtype=bool) if frozen is None else frozen.copy()
-        still |= self.out_of_time()
-        total = np.zeros(self.n_envs)
-        points = np.zeros(self.n_envs, dtype=np.int64)
-        drained = np.zeros(self.n_envs, dtype=bool)
-
-        def frame(actions: Any, idle: np.ndarray) -> np.ndarray:
-            reward, game_over = self.step_frame(actions, rngs, idle if idle.any() else None)
-            moved = ~idle
-            total[moved] += reward[moved]
-            points[moved] += state.points[moved]
-            drained[moved] |= state.drained[moved]
-            return game_over | self.out_of_time()
-
-        for _ in range(self.frame_skip):
-            if still.all():
+        commands = self.buttons(actions)[:, self.world.flipper_buttons]
+        progress = self._progress
+        playing = self._everyone if frozen is None else ~frozen
+        progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
+        rules = self._rules()
+        geometries, settings = self.world.tables()
+        args = (geometries, settings, self.state, self.world.scratch, progress, rules, commands,
+                self.world.swept_kernel)  # fmt: skip
+        if self._play is None:
+            self._play = compiled_entry(_play_frames, (*args, 0, 0))
+        while True:
+            self.world.threads.run(self._play, self.n_envs, *args)
+            if not progress.finite.all():
+                bad = np.flatnonzero(~progress.finite).tolist()
+                raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
+            physics = progress.stage == PHYSICS  # (not swept) the backend's frame is due
+            if physics.any():
+                self.world.step(None, physics)
+                progress.stage[physics] = AFTER_PHYSICS
+            launches = np.flatnonzero(progress.launch)
+            for env in launches:
+                self.launch(env, rngs[env])
+            progress.launch[:] = False
+            if not physics.any() and len(launches) == 0:
                 break
-            still |= frame(actions, still)
-        if self.skip_above:
-            limit = self.skip_above * self._height
-            for _ in range(MAX_SKIP_FRAMES):
-                high = ~still & self.world.active & (self.world.balls[:, BALL_Y] > limit)
-                if not high.any():
-                    break
-                still |= frame(self._released, ~high)
-        state.points[:] = points
-        state.drained[:] = drained
-        return total, state.balls_left == 0
+        self.state.points[playing] = progress.points[playing]
+        self.state.drained[playing] = progress.drained[playing]
+        return np.where(playing, progress.reward, 0.0), self.state.balls_left == 0
 
     def out_of_time(self) -> np.ndarray:
         """(n_envs,) bool: the game has played ``max_frames`` frames (never, without)."""
@@ -333,62 +389,21 @@ class Game:
             return np.zeros(self.n_envs, dtype=bool)
         return self.state.frames >= self.max_frames
 
-    def step_frame(
-        self,
-        actions: Any,
-        rngs: Sequence[np.random.Generator],
-        frozen: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """One frame of every env: :meth:`step` with ``frame_skip`` 1 and no ``skip_above``.
-        Frozen envs are not stepped at all (their arrays keep every value, their streams draw
-        nothing)."""
-        buttons = self.buttons(actions)
-        moving = None if frozen is None or not frozen.any() else ~frozen
-        state, balls = self.state, self.world.balls
-        height_before = balls[:, BALL_Y].copy() if self.height_shaping else None
-        self.world.step(buttons, moving)
-        points = self.world.frame_points()
-        if moving is not None:
-            points[frozen] = 0  # their hits are those of their last frame
-        state.score[:] += points
-        drained = state.balls_left > 0
-        drained &= ~self.world.active  # never a frozen env's: its ball was launched
-        state.drain_height[drained] = balls[drained, BALL_Y]
-        state.balls_left[:] -= drained
-        for env in np.flatnonzero(drained & (state.balls_left > 0)):
-            self.launch(env, rngs[env])
-        self._search_balls(rngs, moving)
-        if moving is None:
-            state.frames[:] += 1
-            state.points[:] = points
-            state.drained[:] = drained
-        else:
-            state.frames[moving] += 1
-            state.points[moving] = points[moving]
-            state.drained[moving] = drained[moving]
-        reward = points * self.reward_scale
-        if self.drain_penalty:
-            reward -= self.drain_penalty * drained
-        if self.height_shaping:
-            # A drained ball's last height is where it crossed the drain, not the next ball's.
-            height_after = np.where(drained, state.drain_height, balls[:, BALL_Y])
-            reward += self.height_shaping * (height_after - height_before) / self._height
-        return reward, state.balls_left == 0
-
-    def _search_balls(
-        self, rngs: Sequence[np.random.Generator], moving: np.ndarray | None = None
-    ) -> None:
-        """Ball search (see BALL_SEARCH_TIME): serve again every ball in play that has not
-        moved a ball radius for that long (of the ``moving`` envs; None: all)."""
-        state = self.state
-        due = _count_still_frames(
-            self.world.balls, self.world.active, state.anchor, state.still_frames,
-            self.table.ball.radius, self.ball_search_frames,
-            self._everyone if moving is None else moving,
-        )  # fmt: skip
-        if due:
-            for env in np.flatnonzero(state.still_frames >= self.ball_search_frames):
-                self.launch(env, rngs[env])
+    def _rules(self) -> Rules:
+        """The numbers the compiled step loop plays by (per env where tables differ)."""
+        return Rules(
+            reward_scale=self.reward_scale,
+            drain_penalty=self.drain_penalty,
+            height_shaping=self.height_shaping,
+            heights=self._height,
+            skip_heights=self.skip_above * self._height,
+            frame_skip=self.frame_skip,
+            skip_frames=MAX_SKIP_FRAMES if self.skip_above else 0,
+            max_frames=-1 if self.max_frames is None else self.max_frames,
+            search_frames=self.ball_search_frames,
+            radius=self.table.ball.radius,
+            scores=self.world.scores,
+        )
 
     # --- what the agent sees ------------------------------------------------------------------
 
@@ -477,25 +492,130 @@ def _flipper_numbers(table: Table) -> np.ndarray:
     return np.array([rest, np.sign(up - rest), np.abs(up - rest), top])
 
 
-@njit(cache=True)
-def _count_still_frames(balls, active, anchor, still_frames, radius, limit, moving):
-    """Count, per env that is ``moving``, the frames since its ball last moved ``radius`` away
-    from ``anchor`` (restarting the count and the anchor when it does, or is out of play).
-    Returns whether a count reached ``limit``. Compiled: the single env pays it every step."""
-    due = False
-    for env in range(balls.shape[0]):
-        if not moving[env]:
-            continue
-        dx = balls[env, BALL_X] - anchor[env, 0]
-        dy = balls[env, BALL_Y] - anchor[env, 1]
-        if not active[env] or dx * dx + dy * dy > radius * radius:
-            anchor[env, 0] = balls[env, BALL_X]
-            anchor[env, 1] = balls[env, BALL_Y]
-            still_frames[env] = 0
-        else:
-            still_frames[env] += 1
-            due = due or still_frames[env] >= limit
-    return due
+@njit(cache=True, nogil=True)
+def _play_frames(
+    geometries, settings, state, scratch, progress, rules, commands, swept, start, stop
+):
+    """Take the step of envs ``start`` to ``stop`` on from where each is (``progress.stage``),
+    each env's frames one after another, to its end (STEP_DONE), or to where it needs a launch
+    (``progress.launch``; Python draws it from the env's stream), or, unless ``swept``, the
+    physics of a frame (PHYSICS; Python runs the world's backend). With ``swept`` the physics
+    is the swept kernel's :func:`step_ball`, on ``geometries[env]`` and ``settings[env]`` (or
+    their only entries, see ``World.tables``); a ball state that is no longer finite ends the
+    env's step (``progress.finite``).
+
+    A frame: the flipper commands (the action's for the first ``frame_skip`` frames, then
+    released while the ball is above ``skip_heights``), the physics, the points scored, a
+    drained ball (the next one is launched), the ball search (BALL_SEARCH_TIME), the frame's
+    reward. Envs are independent: threads may share the range.
+
+    Written out in one body, as ``step_ball``: numba counts a reference for every array taken
+    out of a record, and taking them out once per call instead of once per helper and frame
+    makes a frame of the plain env about 1.7x faster.
+    """
+    world = state.world
+    balls, active, hits, flipper_command = (
+        world.balls,
+        world.active,
+        world.hits,
+        world.flipper_command,
+    )
+    score, balls_left, drain_height = state.score, state.balls_left, state.drain_height
+    anchor, still_frames, game_frames = state.anchor, state.still_frames, state.frames
+    stage, frames, total, points, drained = (
+        progress.stage,
+        progress.frames,
+        progress.reward,
+        progress.points,
+        progress.drained,
+    )
+    height_before, frame_points, frame_drained = (
+        progress.height_before,
+        progress.frame_points,
+        progress.frame_drained,
+    )
+    launch, finite = progress.launch, progress.finite
+    scores, heights, skip_heights = rules.scores, rules.heights, rules.skip_heights
+    r2 = rules.radius * rules.radius
+    per_env = len(geometries) > 1  # else every env plays the one table
+    geometry, setting = geometries[0], settings[0]
+    flipper_id = first_flipper(geometry)
+    for env in range(start, stop):
+        if per_env:
+            geometry, setting = geometries[env], settings[env]
+            flipper_id = first_flipper(geometry)
+        while not launch[env]:
+            now = stage[env]
+            if now == NEW_STEP:
+                frames[env] = points[env] = 0
+                total[env] = 0.0
+                drained[env] = False
+                finite[env] = True
+                stage[env] = NEXT_FRAME
+            elif now == NEXT_FRAME:
+                k = frames[env]
+                held = k < rules.frame_skip
+                high = active[env] and balls[env, BALL_Y] > skip_heights[env]
+                if (
+                    (rules.max_frames >= 0 and game_frames[env] >= rules.max_frames)
+                    or (k > 0 and balls_left[env] == 0)  # the game ended in the step
+                    or not (held or (high and k < rules.frame_skip + rules.skip_frames))
+                ):
+                    stage[env] = STEP_DONE
+                    continue
+                for j in range(flipper_command.shape[1]):
+                    flipper_command[env, j] = held and commands[env, j]
+                height_before[env] = balls[env, BALL_Y]
+                stage[env] = PHYSICS
+            elif now == PHYSICS:
+                if not swept:
+                    break
+                if not step_ball(geometry, setting, world, scratch, env, flipper_id):  # fmt: skip
+                    finite[env] = False
+                    stage[env] = STEP_DONE
+                else:
+                    stage[env] = AFTER_PHYSICS
+            elif now == AFTER_PHYSICS:  # points and drains; a launch for the next ball
+                scored = 0
+                for element in range(hits.shape[1]):
+                    scored += hits[env, element] * scores[env, element]
+                score[env] += scored
+                gone = balls_left[env] > 0 and not active[env]
+                if gone:
+                    drain_height[env] = balls[env, BALL_Y]
+                    balls_left[env] -= 1
+                frame_points[env] = scored
+                frame_drained[env] = gone
+                launch[env] = gone and balls_left[env] > 0
+                stage[env] = SEARCH
+            elif now == SEARCH:  # a ball that has not moved a radius for long is served again
+                dx = balls[env, BALL_X] - anchor[env, 0]
+                dy = balls[env, BALL_Y] - anchor[env, 1]
+                if not active[env] or dx * dx + dy * dy > r2:
+                    anchor[env, 0] = balls[env, BALL_X]
+                    anchor[env, 1] = balls[env, BALL_Y]
+                    still_frames[env] = 0
+                else:
+                    still_frames[env] += 1
+                    launch[env] = still_frames[env] >= rules.search_frames
+                stage[env] = CLOSE_FRAME
+            elif now == CLOSE_FRAME:  # the frame's reward
+                gone = frame_drained[env]
+                reward = frame_points[env] * rules.reward_scale
+                if rules.drain_penalty:
+                    reward -= rules.drain_penalty * gone
+                if rules.height_shaping:
+                    # A drained ball's last height is where it crossed the drain, not the next's.
+                    after = drain_height[env] if gone else balls[env, BALL_Y]
+                    reward += rules.height_shaping * (after - height_before[env]) / heights[env]
+                game_frames[env] += 1
+                frames[env] += 1
+                total[env] += reward
+                points[env] += frame_points[env]
+                drained[env] |= gone
+                stage[env] = NEXT_FRAME
+            else:
+                break
 
 
 @njit(cache=True)

@@ -36,6 +36,8 @@ class EnvThreads:
 
     def run(self, kernel: Callable[..., Any], n_envs: int, *args: Any) -> list[Any]:
         """The kernel's results, one per range, in env order."""
+        if self.num_threads == 1:
+            return [kernel(*args, 0, n_envs)]
         parts = min(self.num_threads, n_envs)
         bounds = np.linspace(0, n_envs, parts + 1).astype(np.int64)
         ranges = [(int(a), int(b)) for a, b in itertools.pairwise(bounds)]

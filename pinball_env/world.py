@@ -11,7 +11,7 @@ its own (generated layouts): the World then steps every env on its own table in 
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
@@ -55,6 +55,19 @@ class Contact:
     speed: float  # normal approach speed before the response [m/s] (0 for sensors)
 
 
+def compiled_entry(function: Callable[..., Any], args: tuple) -> Callable[..., Any]:
+    """The compiled entry of numba function ``function`` for the types of ``args``, compiled
+    (or loaded from the cache) by calling it with them: a call of the entry skips numba's
+    dispatch, which infers the type of every array on every call (about 3.5 us for the
+    kernel's 26, as long as the kernel takes for a ball). ``args`` must be a call that changes
+    nothing (no env). ``function`` itself with ``NUMBA_DISABLE_JIT``."""
+    function(*args)
+    overloads = getattr(function, "overloads", None)
+    if overloads is None:
+        return function
+    return overloads[tuple(numba.typeof(arg) for arg in args)].entry_point
+
+
 class World:
     """``n_envs`` independent balls and flipper sets, on the same table unless
     :meth:`set_table` gives some env another, stepped together.
@@ -71,6 +84,10 @@ class World:
             results are bitwise the same for any count).
     """
 
+    # Whether the physics is the swept kernel's ``step_ball``, which compiled loops over frames
+    # (the game's step) may call directly; a backend that swaps :meth:`_advance` says no.
+    swept_kernel: ClassVar[bool] = True
+
     def __init__(self, table: Table, n_envs: int = 1, num_threads: int = 1) -> None:
         self.threads = EnvThreads(num_threads)
         self._entry: Callable[..., int] | None = None
@@ -80,15 +97,18 @@ class World:
         self.state = make_state(self.geometry, n_envs)
         self.scratch = make_scratch(self.geometry, self.settings, n_envs)
         # Column of the buttons array that drives each flipper.
-        self._flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
-        # Per-env tables, once set_table has given an env its own: the tables, their packed
-        # arrays (typed lists, the kernel's) and points per element id (rows padded with 0).
+        self.flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
+        # Points per element id, per env (rows padded with 0 once envs have their own tables).
+        self.scores = np.tile(np.asarray(table.element_scores, dtype=np.int64), (n_envs, 1))
+        # Per-env tables, once set_table has given an env its own: the tables and their packed
+        # arrays (typed lists, the kernel's).
         self._tables: list[Table] | None = None
         self._geometries: List | None = None
         self._settings: List | None = None
-        self._scores: np.ndarray | None = None
         self._packed: dict[int, tuple[Table, Any, Any]] = {}  # id -> (table, packed arrays)
         self._same_geometries: List | None = None  # geometries() while every env has `table`
+        self._one_table: tuple[List, List] | None = None  # tables() while every env has `table`
+        self._everyone = np.ones(n_envs, dtype=bool)  # the kernel's mask that steps every env
         for env in range(n_envs):
             self.rest_flippers(env)
             self.place_ball(env, table.ball.start, table.ball.velocity)
@@ -163,6 +183,16 @@ class World:
             return self._same_geometries
         return self._geometries
 
+    def tables(self) -> tuple[List, List]:
+        """The packed tables and settings the envs play, typed lists (for compiled code that
+        steps each env with ``physics.step_ball``): one entry per env, or a single entry while
+        every env plays ``table``."""
+        if self._geometries is None:
+            if self._one_table is None:
+                self._one_table = (List([self.geometry]), List([self.settings]))
+            return self._one_table
+        return self._geometries, self._settings
+
     def set_table(self, env: int, table: Table) -> None:
         """Make env ``env`` play ``table`` from now on: its flippers at rest, its ball at the
         table's start. The table needs the flippers of the World's table, driven by the same
@@ -174,16 +204,14 @@ class World:
             )
         if self._tables is None:
             self._tables = [self.table] * self.n_envs
-            self._scores = np.zeros(self.state.hits.shape, dtype=np.int64)
-            self._scores[:] = self.table.element_scores
             self._pack_tables()
         geometry, settings = self._pack(table)
         self._fit(element_count(geometry), geometry.sensors.shape[0], settings.max_passes)
         self._tables[env] = table
         self._geometries[env] = geometry
         self._settings[env] = settings
-        self._scores[env] = 0
-        self._scores[env, : len(table.element_scores)] = table.element_scores
+        self.scores[env] = 0
+        self.scores[env, : len(table.element_scores)] = table.element_scores
         self.rest_flippers(env)
         self.place_ball(env, table.ball.start, table.ball.velocity)
 
@@ -220,7 +248,7 @@ class World:
             crossings=widen(self.scratch.crossings, n_sensors),
             hit_elements=widen(self.scratch.hit_elements, max_passes),
         )
-        self._scores = widen(self._scores, n_elements)
+        self.scores = widen(self.scores, n_elements)
 
     def step(self, buttons: np.ndarray | None = None, envs: np.ndarray | None = None) -> None:
         """Advance every env (or those in ``envs``) by one frame.
@@ -241,7 +269,7 @@ class World:
                 )
             if pressed.dtype != np.bool_ and not np.all((pressed == 0) | (pressed == 1)):
                 raise ValueError(f"buttons must be booleans or 0/1, got dtype {pressed.dtype}")
-            commands = pressed[:, self._flipper_buttons]
+            commands = pressed[:, self.flipper_buttons]
             if envs is None:
                 self.state.flipper_command[:] = commands
             else:
@@ -254,37 +282,27 @@ class World:
         """One frame of physics on the state arrays of ``envs`` (a bool mask; None: all): the
         swept-collision kernel. Returns the number of envs whose ball state is no longer
         finite."""
+        moving = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
+        if moving.shape != (self.n_envs,):
+            raise ValueError(f"envs must have shape ({self.n_envs},), got {moving.shape}")
         if self._geometries is None:
-            args = (self.geometry, self.settings, self.state, self.scratch)
+            args = (self.geometry, self.settings, self.state, self.scratch, moving)
         else:
-            args = (self._geometries, self._settings, self.state, self.scratch)
-        kernel = self._kernel(args)
-        if envs is not None:  # a call per run of neighbouring envs (each costs about 1 us)
-            edges = np.flatnonzero(np.diff(np.concatenate([[False], envs, [False]])))
-            return sum(kernel(*args, start, stop) for start, stop in edges.reshape(-1, 2))
-        if self.threads.num_threads == 1:
-            return kernel(*args, 0, self.n_envs)
-        return sum(self.threads.run(kernel, self.n_envs, *args))
+            args = (self._geometries, self._settings, self.state, self.scratch, moving)
+        return sum(self.threads.run(self._kernel(args), self.n_envs, *args))
 
     def _kernel(self, args: tuple) -> Callable[..., int]:
-        """``step_world``'s compiled entry for these arrays' types. Calling it skips numba's
-        dispatch, which infers the types of the 26 arrays on every call (about 3.5 us, as long
-        as the kernel takes for a ball)."""
+        """``step_world``'s (or ``step_tables``') compiled entry for these arrays' types."""
         if self._entry is None:
             step = step_world if self._geometries is None else step_tables
-            step(*args, 0, 0)  # compiles (or loads) the kernel for these types; no env
-            overloads = getattr(step, "overloads", None)  # None: NUMBA_DISABLE_JIT
-            if overloads is None:
-                self._entry = step
-            else:
-                signature = tuple(numba.typeof(a) for a in (*args, 0, 0))
-                self._entry = overloads[signature].entry_point
+            self._entry = compiled_entry(step, (*args, 0, 0))
         return self._entry
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
-        state["_geometries"] = state["_settings"] = state["_same_geometries"] = None  # nor lists
+        state["_geometries"] = state["_settings"] = None  # nor typed lists
+        state["_same_geometries"] = state["_one_table"] = None
         state["_packed"] = {}  # keyed by ids, which a copy's tables do not keep
         return state
 
@@ -295,9 +313,7 @@ class World:
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""
-        if self._scores is not None:
-            return (self.state.hits * self._scores).sum(axis=1)
-        return self.state.hits @ self.table.element_scores
+        return (self.state.hits * self.scores).sum(axis=1)
 
     def frame_contacts(self, env: int = 0) -> list[Contact]:
         """The logged contacts and sensor crossings of env ``env`` in the last frame."""

@@ -188,6 +188,41 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
     assert 0 < high_asks < 0.1 * 500 * n
 
 
+@pytest.mark.parametrize("num_threads", [1, 2])
+def test_the_compiled_step_loop_plays_the_frame_by_frame_loop_bitwise(num_threads):
+    # The swept kernel's envs play their steps in one compiled loop; other physics backends
+    # go frame by frame with the same rules. Both ways, on the swept physics, are one game:
+    # launches after drains, a ball search (env 0's ball rests on the plunger), the time limit.
+    kwargs = {"frame_skip": 2, "skip_above": 0.26, "height_shaping": 1.0, "drain_penalty": 5.0,
+              "max_frames": 1500, "balls_per_game": 2}  # fmt: skip
+    n = len(SEEDS)
+    compiled = Game(CLASSIC, n_envs=n, num_threads=num_threads, **kwargs)
+    framing = Game(CLASSIC, n_envs=n, **kwargs)
+    framing.world.swept_kernel = False  # as the pymunk backend's world
+    rngs = {game: [np.random.default_rng(seed) for seed in SEEDS] for game in (compiled, framing)}
+    for game in (compiled, framing):
+        game.new_game(0, rngs[game][0], {"ball_velocity": [0.0, 0.0]})
+        for env in range(1, n):
+            game.new_game(env, rngs[game][env])
+    traces = {game: play(game, rngs[game], random_actions("discrete", n, 900, seed=5))
+              for game in (compiled, framing)}  # fmt: skip
+    drained = 0
+    for step, (ours, theirs) in enumerate(zip(traces[compiled], traces[framing], strict=True)):
+        (obs, reward, over, info), (obs1, reward1, over1, info1) = ours, theirs
+        assert obs.tobytes() == obs1.tobytes(), step
+        assert reward.tobytes() == reward1.tobytes(), step
+        assert (over == over1).all()
+        for key, value in info.items():
+            assert value.tobytes() == info1[key].tobytes(), (step, key)
+        drained += int(info["drained"].sum())
+    assert drained > n  # launches after drains
+    # Env 0's ball first left the plunger by the ball search, ten seconds in, no ball lost.
+    heights = [obs[0, 1] for obs, *_ in traces[compiled]]
+    first = next(step for step in range(1, len(heights)) if heights[step] > heights[0] + 0.1)
+    info = traces[compiled][first][3]
+    assert info["balls_left"][0] == 2 and info["frames"][0] >= compiled.ball_search_frames
+
+
 def test_a_game_runs_out_of_time_at_max_frames_exactly():
     for frame_skip, skip_above in ((1, 0.0), (3, 0.0), (2, 0.4)):
         game = Game(CLASSIC, n_envs=2, frame_skip=frame_skip, skip_above=skip_above,

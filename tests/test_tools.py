@@ -15,6 +15,7 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "sync8_pymunk_steps_per_second",
         "native1024_2thread_steps_per_second",
         "native256_grayscale_2thread_steps_per_second",
+        "training128_1thread_steps_per_second",
         "cartpole_vec1024_steps_per_second",
         "kernel_ns_per_ball_element_test",
         "startup_warm_seconds",

@@ -68,6 +68,8 @@ BALL_COLLISION_TYPE = 1
 class PymunkWorld(World):
     """``n_envs`` games on one table, each simulated by its own pymunk space."""
 
+    swept_kernel = False
+
     def __init__(self, table: Table, n_envs: int = 1) -> None:
         self._spaces: list[_EnvSpace] = []
         super().__init__(table, n_envs)

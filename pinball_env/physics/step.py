@@ -672,9 +672,10 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
 
 
 @njit(cache=True, nogil=True)
-def step_world(geometry, settings, state, scratch, start, stop):
-    """Advance envs ``start`` to ``stop`` (``0, n_envs``: every env) by one frame
-    ``settings.dt`` in place, logging contacts and hits. Returns the number of those envs whose
+def step_world(geometry, settings, state, scratch, moving, start, stop):
+    """Advance the envs from ``start`` to ``stop`` (``0, n_envs``: every env) for which
+    ``moving`` ((n_envs,) bool) is set by one frame ``settings.dt`` in place, logging contacts
+    and hits; the others are left exactly as they are. Returns the number of stepped envs whose
     ball state is not finite after the frame (0 for any valid table and state; the caller
     reports the others).
 
@@ -686,13 +687,13 @@ def step_world(geometry, settings, state, scratch, start, stop):
     flipper_id = first_flipper(geometry)
     faults = 0
     for env in range(start, stop):
-        if not step_ball(geometry, settings, state, scratch, env, flipper_id):
+        if moving[env] and not step_ball(geometry, settings, state, scratch, env, flipper_id):
             faults += 1
     return faults
 
 
 @njit(cache=True, nogil=True)
-def step_tables(geometries, settings, state, scratch, start, stop):
+def step_tables(geometries, settings, state, scratch, moving, start, stop):
     """:func:`step_world` for envs that each play their own table: env ``i`` on
     ``geometries[i]`` with ``settings[i]`` (typed lists, one entry per env). Every table has
     as many flippers; the per-element rows of ``state`` and ``scratch`` (hits, sensor
@@ -701,6 +702,8 @@ def step_tables(geometries, settings, state, scratch, start, stop):
     table."""
     faults = 0
     for env in range(start, stop):
+        if not moving[env]:
+            continue
         geometry = geometries[env]
         if not step_ball(geometry, settings[env], state, scratch, env, first_flipper(geometry)):
             faults += 1

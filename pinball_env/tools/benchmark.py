@@ -7,6 +7,9 @@ Measures, with uniformly random actions on the classic table (state observations
 - Gymnasium's ``SyncVectorEnv`` of 8 of each;
 - the native vector env (``gym.make_vec``) at N = 1, 64, 1024 and 4096 envs with 1 and 2
   threads, and at N = 256 with 84x84 grayscale observations;
+- the native vector env as ``configs/agents/ppo.yaml`` trains on it (frame skip 2, the step
+  running on while the ball is high, ``TRAINING_KWARGS``) at N = 32 and 128, 1 thread: each
+  step is about 15 frames of every env;
 - ``PinballProcgen-v0``'s native vector env at N = 1024 with 2 threads, each env on its own
   generated table (16 layouts, generated before the timing), with 16 rays in the observation;
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
@@ -45,6 +48,9 @@ STARTUP = (
     "print(time.perf_counter() - start)"
 )
 
+
+# The env kwargs the default PPO config trains with (configs/agents/ppo.yaml).
+TRAINING_KWARGS = {"frame_skip": 2, "skip_above": 0.26, "drain_penalty": 5.0, "height_shaping": 1.0}
 
 # The ratios reported, numerator and denominator (the issue's targets among them).
 RATIOS = (
@@ -145,8 +151,9 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
         )
         return steps_per_second(env, steps(1000 if physics == "swept" else 200), seed)
 
-    def native(n: int, threads: int, obs_type: str = "state") -> float:
-        env = gym.make_vec("Pinball-v0", num_envs=n, num_threads=threads, obs_type=obs_type)
+    def native(n: int, threads: int, obs_type: str = "state", **kwargs: float) -> float:
+        env = gym.make_vec("Pinball-v0", num_envs=n, num_threads=threads, obs_type=obs_type,
+                           **kwargs)  # fmt: skip
         return steps_per_second(env, steps(max(300, 300_000 // max(n, 100))), seed)
 
     figures: list[tuple[str, Callable[[], float]]] = [
@@ -158,6 +165,8 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
     for n in (1, 64, 1024, 4096):
         for threads in (1, 2):
             figures.append((f"native{n}_{threads}thread", lambda n=n, t=threads: native(n, t)))
+    for n in (32, 128):
+        figures.append((f"training{n}_1thread", lambda n=n: native(n, 1, **TRAINING_KWARGS)))
     cartpole = gym.make("CartPole-v1")
     cartpoles = gym.make_vec("CartPole-v1", num_envs=1024)
 
