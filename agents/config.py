@@ -99,6 +99,13 @@ class TrainConfig:
     """The environment."""
     checkpoint_every: int = 500_000
     """Write a checkpoint every this many env steps (0: only the final model)."""
+    imitation_steps: int = 0
+    """A warm start (0: none; PPO and A2C on state observations and discrete actions): env
+    steps, summed over the envs, of the heuristic playing the training games, whose actions the
+    policy and whose returns the value are fitted to before learning (``agents.imitation``).
+    They count in ``max_minutes``, not in ``total_timesteps``."""
+    imitation_epochs: int = 5
+    """Passes over the heuristic's steps in the warm start."""
     eval_seed: int = 100_000
     """First seed of evaluation games; training never uses seeds from here on."""
     notes: str = ""
@@ -313,6 +320,25 @@ def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
     if image != (config.policy == "CnnPolicy"):
         obs_type = config.env.kwargs.get("obs_type", "state")
         fail("policy", f"{config.policy} does not fit obs_type {obs_type!r}")
+    _check_imitation(config, fail)
+
+
+def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
+    """The warm start: a count of steps and epochs, for an actor-critic on state observations
+    with discrete actions (the heuristic's)."""
+    for key, low in (("imitation_steps", 0), ("imitation_epochs", 1)):
+        value = getattr(config, key)
+        if not isinstance(value, int) or isinstance(value, bool) or value < low:
+            fail(key, f"must be an integer >= {low}, got {value!r}")
+    if not config.imitation_steps:
+        return
+    if config.algo not in ("ppo", "a2c"):
+        fail("imitation_steps", f"a warm start needs an actor-critic (ppo, a2c), not {config.algo}")
+    kwargs = config.env.kwargs
+    if config.policy != "MlpPolicy" or config.env.frame_stack != 1:
+        fail("imitation_steps", "a warm start needs state observations (MlpPolicy, no frame stack)")
+    if kwargs.get("action_type", "discrete") != "discrete":
+        fail("imitation_steps", "a warm start needs discrete actions (the heuristic's)")
 
 
 # PPOConfig.training options that are code, not settings, or belong to other keys (model).

@@ -43,13 +43,16 @@ from agents.config import (
     load_config,
     sb3_hyperparams,
 )
+from agents.imitation import imitate
 
 
-def make_callback(config: TrainConfig, run: Path, frames: int = 0) -> Any:
+def make_callback(
+    config: TrainConfig, run: Path, frames: int = 0, started: float | None = None
+) -> Any:
     """Checkpoints every ``checkpoint_every`` env steps, the mean game score of the last 100
     training games logged as ``rollout/ep_score_mean`` (the score, not the shaped return), the
     frames played by all envs as ``time/frames`` (counted on from ``frames``), and the stop at
-    ``max_minutes``."""
+    ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning starts)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class TrainingCallback(BaseCallback):
@@ -64,7 +67,7 @@ def make_callback(config: TrainConfig, run: Path, frames: int = 0) -> Any:
         def _on_training_start(self) -> None:
             every = config.checkpoint_every
             self.next_checkpoint = (self.num_timesteps // every + 1) * every if every else 0
-            self.deadline = time.monotonic() + 60.0 * config.max_minutes
+            self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
 
         def _on_step(self) -> bool:
             infos = self.locals["infos"]
@@ -125,6 +128,7 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
     """Train (or go on training) in ``run``; returns the final model's path."""
     from stable_baselines3.common.logger import configure
 
+    started = time.monotonic()
     set_threads(config)
     algorithm = algorithm_class(config.algo)
     checkpoint = latest_checkpoint(run) if resume else None
@@ -155,11 +159,21 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
             venv.close()
             raise ConfigError(f"hyperparams: {config.algo.upper()} rejects them: {error}") from None
     model.set_logger(configure(str(run), ["csv", "tensorboard"]))
+    if config.imitation_steps and checkpoint is None:
+        fit = imitate(model, venv, config.imitation_steps, config.imitation_epochs, config.seed)
+        print(
+            f"warm start: the heuristic played {fit['steps']} steps ({fit['frames']} frames); "
+            f"the policy now takes its action {fit['accuracy']:.1%} of the time "
+            f"({fit['seconds']:.0f} s)"
+        )
+        for key in ("steps", "frames", "accuracy", "value_loss", "seconds"):
+            model.logger.record(f"imitation/{key}", fit[key])
+        frames = fit["frames"]
     left = config.total_timesteps - model.num_timesteps
     if left > 0:
         model.learn(
-            left, callback=make_callback(config, run, frames), reset_num_timesteps=not resume,
-            progress_bar=progress_bar,
+            left, callback=make_callback(config, run, frames, started),
+            reset_num_timesteps=not resume, progress_bar=progress_bar,
         )  # fmt: skip
     # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.
     save_model(model, run / CHECKPOINTS, f"step_{model.num_timesteps}")

@@ -7,12 +7,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
 from agents import evaluate, train
-from agents.common import atomic_write, latest_checkpoint, save_model
+from agents.common import atomic_write, latest_checkpoint, make_env, save_model
 from agents.config import ConfigError, load_config, sb3_hyperparams
+from agents.imitation import discounted_returns, imitate, teacher_games
 
 ROOT = Path(__file__).resolve().parent.parent
 # The stable-baselines3 configs (rllib_*.yaml are RLlib's: tests/test_rllib.py).
@@ -191,6 +193,11 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["max_minutes=-1"], "max_minutes: must be a number of minutes >= 0"),
         (["hyperparams.learning_rate=lin_x"], "learning_rate: a schedule is lin_X with X > 0"),
         (["hyperparams.clip_range=lin_-0.2"], "clip_range: a schedule is lin_X with X > 0"),
+        (["imitation_steps=-5"], "imitation_steps: must be an integer >= 0"),
+        (["imitation_epochs=0"], "imitation_epochs: must be an integer >= 1"),
+        (["imitation_steps=100", "algo=dqn", "hyperparams={}"], "needs an actor-critic"),
+        (["imitation_steps=100", "env.kwargs.action_type=multibinary"], "needs discrete actions"),
+        (["imitation_steps=100", "env.frame_stack=2"], "needs state observations"),
     ],
 )
 def test_bad_configs_are_rejected_naming_the_key(overrides, message):
@@ -290,3 +297,32 @@ def test_a_checkpoint_evaluates_and_a_curve_brings_its_baselines(tmp_path):
     evaluate.main(["--model", str(run), "--episodes", "1", "--curve", "--out", str(tmp_path / "e")])
     assert (tmp_path / "e/learning_curve.png").read_bytes()[:4] == b"\x89PNG"
     assert {p.name for p in (tmp_path / "e").iterdir()} >= {"random", "heuristic"}
+
+
+def test_discounted_returns_restart_at_each_game_end():
+    rewards = np.array([[1.0, 0.0], [2.0, 1.0], [4.0, 0.0]])
+    dones = np.array([[False, True], [True, False], [False, False]])
+    returns = discounted_returns(rewards, dones, gamma=0.5)
+    assert returns[:, 0].tolist() == [2.0, 2.0, 4.0]  # 1 + 0.5 * 2, then a new game: 4
+    assert returns[:, 1].tolist() == [0.0, 1.0, 0.0]
+
+
+def test_the_warm_start_fits_the_heuristic_and_counts_in_the_budget(tmp_path):
+    from stable_baselines3 import PPO
+
+    config = load_config(ROOT / "configs/agents/ppo.yaml",
+                         ["env.num_envs=8", "env.kwargs.frame_skip=1"])  # fmt: skip
+    venv = make_env(config)
+    model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
+    fit = imitate(model, venv, steps=8000, epochs=5, seed=0)
+    games = teacher_games(make_env(config), 1000)
+    majority = np.bincount(games["actions"].ravel()).max() / games["actions"].size
+    assert fit["steps"] == 8000 and fit["frames"] > fit["steps"]  # skip_above runs frames on
+    assert fit["accuracy"] > majority + 0.03  # more than always pressing the usual buttons
+    assert venv.obs_rms.count > 8000  # VecNormalize learned from the heuristic's games
+    # Through the command line: the fit is logged, and the learning goes on within the budget.
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", "imitation_steps=512")
+    with open(run / "progress.csv") as file:
+        row = next(csv.DictReader(file))
+    assert float(row["imitation/steps"]) == 512 and float(row["imitation/accuracy"]) > 0.5
+    assert int(float(row["time/frames"])) > int(float(row["imitation/frames"]))

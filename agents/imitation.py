@@ -1,0 +1,119 @@
+"""A warm start for actor-critic agents: behaviour cloning of the heuristic.
+
+With ``imitation_steps`` > 0 in a config, before it learns, the heuristic
+(``pinball_env.heuristic.HeuristicPolicy``) plays the training games for that many env steps
+(summed over the envs), through the training env chain, so that ``VecNormalize``'s statistics
+start from its games. The policy is then fitted to the heuristic's actions (cross-entropy) and
+the value to the discounted returns of its games (mean squared error, the rewards normalised
+as the algorithm will see them), ``imitation_epochs`` passes in minibatches. Learning goes on
+from there. The teacher's steps count in ``max_minutes`` and in ``time/frames``, not in
+``total_timesteps``.
+
+The heuristic is the bar the agent has to beat: copying it is where learning starts, not
+the result; the evaluation plays the learned policy alone.
+"""
+
+import time
+from typing import Any
+
+import numpy as np
+
+from pinball_env.heuristic import HeuristicPolicy
+
+BATCH_SIZE = 512
+
+
+def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
+    """The heuristic's play for ``steps`` steps of each env of ``venv`` (an SB3 VecEnv,
+    possibly ``VecNormalize``, whose statistics learn from it): per step and env, the raw
+    observation, the action, the raw reward and whether the game ended. Also ``frames``: the
+    frames played, summed over the envs."""
+    n = venv.num_envs
+    game = venv.get_attr("game")[0]
+    players = [HeuristicPolicy(game.world.table_of(env)) for env in range(n)]
+    raw = getattr(venv, "get_original_obs", None)
+    obs = venv.reset()
+    infos = list(venv.unwrapped.reset_infos)
+    observations, actions, rewards, dones = [], [], [], []
+    game_frames = np.zeros(n, dtype=np.int64)  # of each env's game, at the last step
+    frames = 0
+    for _ in range(steps):
+        observations.append(raw() if raw else obs)
+        action = np.array([player(info) for player, info in zip(players, infos, strict=True)])
+        obs, reward, done, infos = venv.step(action)
+        actions.append(action)
+        rewards.append(venv.get_original_reward() if raw else reward)
+        dones.append(done)
+        for env in range(n):
+            frames += infos[env]["frames"] - game_frames[env]
+            game_frames[env] = 0 if done[env] else infos[env]["frames"]
+        for env in np.flatnonzero(done):
+            # The step's info is the ended game's; the next game starts from the observation.
+            players[env] = HeuristicPolicy(game.world.table_of(env))
+            first = raw()[env] if raw else obs[env]
+            infos[env] = {"ball_position": first[:2], "ball_velocity": first[2:4]}
+    return {
+        "obs": np.stack(observations),
+        "actions": np.stack(actions),
+        "rewards": np.stack(rewards),
+        "dones": np.stack(dones),
+        "frames": np.array(frames),
+    }
+
+
+def discounted_returns(rewards: np.ndarray, dones: np.ndarray, gamma: float) -> np.ndarray:
+    """(steps, envs) returns: each reward plus ``gamma`` times the next return, restarting at
+    each game's end; the last step's return is its reward (no bootstrap)."""
+    returns = np.zeros_like(rewards, dtype=np.float64)
+    following = np.zeros(rewards.shape[1])
+    for step in range(len(rewards) - 1, -1, -1):
+        following = rewards[step] + gamma * following * (1.0 - dones[step])
+        returns[step] = following
+    return returns
+
+
+def imitate(model: Any, venv: Any, steps: int, epochs: int, seed: int) -> dict[str, float]:
+    """Play ``steps`` env steps of the heuristic in ``venv`` and fit ``model``'s policy and value
+    to them (see the module's docstring); returns the fit's figures."""
+    import torch
+
+    start = time.monotonic()
+    games = teacher_games(venv, max(1, steps // venv.num_envs))
+    normalize = getattr(venv, "normalize_obs", None)
+    obs = games["obs"].reshape(-1, *games["obs"].shape[2:])
+    obs = normalize(obs) if normalize else obs
+    rewards = games["rewards"]
+    if hasattr(venv, "normalize_reward"):
+        rewards = venv.normalize_reward(rewards)
+    returns = discounted_returns(rewards, games["dones"], model.gamma).reshape(-1)
+    actions = games["actions"].reshape(-1)
+    policy = model.policy
+    policy.set_training_mode(True)
+    device = policy.device
+    obs_t = torch.as_tensor(obs, dtype=torch.float32, device=device)
+    actions_t = torch.as_tensor(actions, device=device)
+    returns_t = torch.as_tensor(returns, dtype=torch.float32, device=device)
+    rng = np.random.default_rng(seed)
+    vf_coef = getattr(model, "vf_coef", 0.5)
+    for _ in range(epochs):
+        order = rng.permutation(len(actions))
+        for first in range(0, len(order), BATCH_SIZE):
+            batch = torch.as_tensor(order[first : first + BATCH_SIZE], device=device)
+            values, log_prob, _ = policy.evaluate_actions(obs_t[batch], actions_t[batch])
+            value_loss = torch.nn.functional.mse_loss(values.flatten(), returns_t[batch])
+            loss = -log_prob.mean() + vf_coef * value_loss
+            policy.optimizer.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
+            policy.optimizer.step()
+    policy.set_training_mode(False)
+    with torch.no_grad():
+        chosen = policy.get_distribution(obs_t).distribution.probs.argmax(dim=1)
+        values = policy.predict_values(obs_t).flatten()
+    return {
+        "steps": len(actions),
+        "frames": int(games["frames"]),
+        "accuracy": float((chosen == actions_t).float().mean()),
+        "value_loss": float(torch.mean((values - returns_t) ** 2)),
+        "seconds": time.monotonic() - start,
+    }
