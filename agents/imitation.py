@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from pinball_env.heuristic import HeuristicPolicy
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 
 BATCH_SIZE = 512
 
@@ -31,15 +32,19 @@ def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
     n = venv.num_envs
     game = venv.get_attr("game")[0]
     players = [HeuristicPolicy(game.world.table_of(env)) for env in range(n)]
+    balls = game.world.balls  # the heuristic reads the ball's state, as from the env's info
     raw = getattr(venv, "get_original_obs", None)
     obs = venv.reset()
-    infos = list(venv.unwrapped.reset_infos)
     observations, actions, rewards, dones = [], [], [], []
     game_frames = np.zeros(n, dtype=np.int64)  # of each env's game, at the last step
     frames = 0
     for _ in range(steps):
         observations.append(raw() if raw else obs)
-        action = np.array([player(info) for player, info in zip(players, infos, strict=True)])
+        action = np.array([
+            player({"ball_position": balls[env, [BALL_X, BALL_Y]],
+                    "ball_velocity": balls[env, [BALL_VX, BALL_VY]]})
+            for env, player in enumerate(players)
+        ])  # fmt: skip
         obs, reward, done, infos = venv.step(action)
         actions.append(action)
         rewards.append(venv.get_original_reward() if raw else reward)
@@ -47,11 +52,8 @@ def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
         for env in range(n):
             frames += infos[env]["frames"] - game_frames[env]
             game_frames[env] = 0 if done[env] else infos[env]["frames"]
-        for env in np.flatnonzero(done):
-            # The step's info is the ended game's; the next game starts from the observation.
+        for env in np.flatnonzero(done):  # a new game (maybe on a new table): a new player
             players[env] = HeuristicPolicy(game.world.table_of(env))
-            first = raw()[env] if raw else obs[env]
-            infos[env] = {"ball_position": first[:2], "ball_velocity": first[2:4]}
     return {
         "obs": np.stack(observations),
         "actions": np.stack(actions),
