@@ -514,26 +514,14 @@ def _play_frames(
     makes a frame of the plain env about 1.7x faster.
     """
     world = state.world
-    balls, active, hits, flipper_command = (
-        world.balls,
-        world.active,
-        world.hits,
-        world.flipper_command,
-    )
+    balls, active, hits = world.balls, world.active, world.hits
+    flipper_command = world.flipper_command
     score, balls_left, drain_height = state.score, state.balls_left, state.drain_height
     anchor, still_frames, game_frames = state.anchor, state.still_frames, state.frames
-    stage, frames, total, points, drained = (
-        progress.stage,
-        progress.frames,
-        progress.reward,
-        progress.points,
-        progress.drained,
-    )
-    height_before, frame_points, frame_drained = (
-        progress.height_before,
-        progress.frame_points,
-        progress.frame_drained,
-    )
+    stage, frames, total = progress.stage, progress.frames, progress.reward
+    points, drained = progress.points, progress.drained
+    height_before = progress.height_before
+    frame_points, frame_drained = progress.frame_points, progress.frame_drained
     launch, finite = progress.launch, progress.finite
     scores, heights, skip_heights = rules.scores, rules.heights, rules.skip_heights
     r2 = rules.radius * rules.radius
@@ -570,7 +558,7 @@ def _play_frames(
             elif now == PHYSICS:
                 if not swept:
                     break
-                if not step_ball(geometry, setting, world, scratch, env, flipper_id):  # fmt: skip
+                if not step_ball(geometry, setting, world, scratch, env, flipper_id):
                     finite[env] = False
                     stage[env] = STEP_DONE
                 else:
