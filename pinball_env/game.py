@@ -191,7 +191,7 @@ class Game:
             frames=np.zeros(n_envs, dtype=np.int64),
         )
         self._everyone = np.ones(n_envs, dtype=bool)
-        self._play: Any = None  # _play_frames's compiled entry (see compiled_entry)
+        self._play: dict[type, Any] = {}  # _play_frames's compiled entries (compiled_entry)
         self._progress = StepProgress(
             stage=np.zeros(n_envs, dtype=np.int64),
             frames=np.zeros(n_envs, dtype=np.int64),
@@ -235,7 +235,7 @@ class Game:
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        state["_play"] = None  # a compiled entry cannot be pickled; a copy finds its own
+        state["_play"] = {}  # compiled entries cannot be pickled; a copy finds its own
         return state
 
     @property
@@ -362,10 +362,11 @@ class Game:
         geometries, settings = self.world.tables()
         args = (geometries, settings, self.state, self.world.scratch, progress, rules, commands,
                 self.world.swept_kernel)  # fmt: skip
-        if self._play is None:
-            self._play = compiled_entry(_play_frames, (*args, 0, 0))
+        play = self._play.get(type(geometries))  # one table (tuples) or one per env (lists)
+        if play is None:
+            play = self._play[type(geometries)] = compiled_entry(_play_frames, (*args, 0, 0))
         while True:
-            self.world.threads.run(self._play, self.n_envs, *args)
+            self.world.threads.run(play, self.n_envs, *args)
             if not progress.finite.all():
                 bad = np.flatnonzero(~progress.finite).tolist()
                 raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")

@@ -107,7 +107,6 @@ class World:
         self._settings: List | None = None
         self._packed: dict[int, tuple[Table, Any, Any]] = {}  # id -> (table, packed arrays)
         self._same_geometries: List | None = None  # geometries() while every env has `table`
-        self._one_table: tuple[List, List] | None = None  # tables() while every env has `table`
         self._everyone = np.ones(n_envs, dtype=bool)  # the kernel's mask that steps every env
         for env in range(n_envs):
             self.rest_flippers(env)
@@ -183,14 +182,13 @@ class World:
             return self._same_geometries
         return self._geometries
 
-    def tables(self) -> tuple[List, List]:
-        """The packed tables and settings the envs play, typed lists (for compiled code that
-        steps each env with ``physics.step_ball``): one entry per env, or a single entry while
-        every env plays ``table``."""
+    def tables(self) -> tuple[Any, Any]:
+        """The packed tables and settings the envs play (for compiled code that steps each env
+        with ``physics.step_ball``): typed lists with an entry per env, or, while every env
+        plays ``table``, 1-tuples (numba then compiles the loop for the one table, which
+        steps 2 threads about 20% faster than a typed list)."""
         if self._geometries is None:
-            if self._one_table is None:
-                self._one_table = (List([self.geometry]), List([self.settings]))
-            return self._one_table
+            return (self.geometry,), (self.settings,)
         return self._geometries, self._settings
 
     def set_table(self, env: int, table: Table) -> None:
@@ -302,7 +300,7 @@ class World:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
         state["_geometries"] = state["_settings"] = None  # nor typed lists
-        state["_same_geometries"] = state["_one_table"] = None
+        state["_same_geometries"] = None
         state["_packed"] = {}  # keyed by ids, which a copy's tables do not keep
         return state
 

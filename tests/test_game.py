@@ -267,3 +267,22 @@ def test_a_drained_ball_costs_the_drain_penalty():
 def test_bad_step_options_are_rejected(kwargs, message):
     with pytest.raises(ValueError, match=message):
         Game(CLASSIC, **kwargs)
+
+
+def test_a_game_plays_on_bitwise_when_an_env_gets_its_own_table():
+    # The compiled loop runs on the one table until set_table gives an env its own (the
+    # per-env path, which procgen uses): with an equal table the games are bitwise the same.
+    games = [Game(CLASSIC, n_envs=2, frame_skip=2, skip_above=0.26) for _ in range(2)]
+    rngs = [[np.random.default_rng(seed) for seed in (4, 5)] for _ in games]
+    actions = random_actions("discrete", 2, 400, seed=9)
+    for game, game_rngs in zip(games, rngs, strict=True):
+        for env in range(2):
+            game.new_game(env, game_rngs[env])
+        play(game, game_rngs, actions[:200])
+    games[0].set_table(1, load_table("classic"))  # its own (equal) table object
+    for game, game_rngs in zip(games, rngs, strict=True):
+        game.new_game(1, game_rngs[1])
+    traces = [play(game, r, actions[200:]) for game, r in zip(games, rngs, strict=True)]
+    for ours, theirs in zip(*traces, strict=True):
+        assert ours[0].tobytes() == theirs[0].tobytes()
+        assert ours[1].tobytes() == theirs[1].tobytes()
