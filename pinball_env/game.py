@@ -1,10 +1,12 @@
 """The rules of pinball over a batch of envs: actions to buttons, balls per game, launches, drains,
 score, reward, the state observation and the per-step info.
 
-Everything is vectorised over the env axis, so the single env (a Game of one) and a vector env
-(a Game of N) run the same code; the physics is the World's kernel. Everything that changes
-during play is in one record, :class:`GameState`, so that a game can be snapshotted and restored
-as one object.
+Everything works over the env axis, so the single env (a Game of one) and a vector env (a Game
+of N) run the same code. A step's frames run in one compiled loop, :func:`_play_frames`: per
+env, the frames of the step one after another, the World's kernel (``step_ball``) for the
+physics and the rules written out beside it; only launches (random draws) come back to Python.
+Everything that changes during play is in one record, :class:`GameState`, so that a game can be
+snapshotted and restored as one object.
 """
 
 import math
