@@ -193,6 +193,7 @@ class Game:
             frames=np.zeros(n_envs, dtype=np.int64),
         )
         self._everyone = np.ones(n_envs, dtype=bool)
+        self._rules: Rules | None = None  # the step loop's numbers (see _rules_now)
         self._play: dict[type, Any] = {}  # _play_frames's compiled entries (compiled_entry)
         self._progress = StepProgress(
             stage=np.zeros(n_envs, dtype=np.int64),
@@ -234,10 +235,12 @@ class Game:
         self._width[env] = table.width
         self._height[env] = table.height
         self._scoring[env] = np.flatnonzero(table.element_scores)
+        self._rules = None  # heights and scores changed, and the arrays may have grown
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_play"] = {}  # compiled entries cannot be pickled; a copy finds its own
+        state["_rules"] = None  # a copy makes its own, over its own arrays
         return state
 
     @property
@@ -360,7 +363,7 @@ class Game:
         progress = self._progress
         playing = self._everyone if frozen is None else ~frozen
         progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
-        rules = self._rules()
+        rules = self._rules_now()
         geometries, settings = self.world.tables()
         args = (geometries, settings, self.state, self.world.scratch, progress, rules, commands,
                 self.world.swept_kernel)  # fmt: skip
@@ -392,8 +395,14 @@ class Game:
             return np.zeros(self.n_envs, dtype=bool)
         return self.state.frames >= self.max_frames
 
-    def _rules(self) -> Rules:
-        """The numbers the compiled step loop plays by (per env where tables differ)."""
+    def _rules_now(self) -> Rules:
+        """The numbers the compiled step loop plays by (per env where tables differ), made
+        again only after :meth:`set_table`."""
+        if self._rules is None:
+            self._rules = self._make_rules()
+        return self._rules
+
+    def _make_rules(self) -> Rules:
         return Rules(
             reward_scale=self.reward_scale,
             drain_penalty=self.drain_penalty,
