@@ -106,6 +106,15 @@ class TrainConfig:
     They count in ``max_minutes``, not in ``total_timesteps``."""
     imitation_epochs: int = 5
     """Passes over the heuristic's steps in the warm start."""
+    validate_every: int = 0
+    """Every this many env steps, and at the end (0: never), the model plays
+    ``validate_episodes`` whole games from ``validate_seed`` on, deterministically; the best of
+    these validations becomes the run's ``model.zip`` (``agents.train``). They count in
+    ``max_minutes``."""
+    validate_episodes: int = 100
+    """Games of each validation (the same games every time)."""
+    validate_seed: int = 300_000
+    """First seed of the validation games: neither a training game nor an evaluation game."""
     eval_seed: int = 100_000
     """First seed of evaluation games; training never uses seeds from here on."""
     notes: str = ""
@@ -123,6 +132,12 @@ class TrainConfig:
     def training_seeds(self) -> int:
         """How many seeds from ``seed`` on the training games start from."""
         return self.env.num_envs
+
+    @property
+    def validation_seeds(self) -> range:
+        """The seeds of the validation games (none without validation)."""
+        first = self.validate_seed
+        return range(first, first + self.validate_episodes if self.validate_every else first)
 
 
 @dataclass(frozen=True)
@@ -298,6 +313,38 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
     _check_env(config.env, fail)
 
 
+def _check_validation(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
+    """Validation games: counts, and seeds apart from the training and evaluation games."""
+    for key, low in (("validate_every", 0), ("validate_episodes", 1), ("validate_seed", 0)):
+        value = getattr(config, key)
+        if not isinstance(value, int) or isinstance(value, bool) or value < low:
+            fail(key, f"must be an integer >= {low}, got {value!r}")
+    games = config.validation_seeds
+    if not games:
+        return
+    if games.start < config.seed + config.training_seeds:
+        fail("validate_seed", f"{games.start} overlaps the training seeds {config.seed}.."
+                              f"{config.seed + config.training_seeds - 1}")  # fmt: skip
+    if config.eval_seed in games:
+        fail("validate_seed", f"the validation games {games.start}..{games.stop - 1} hold "
+                              f"eval_seed {config.eval_seed}")  # fmt: skip
+
+
+def check_evaluation_seeds(config: AnyConfig, first: int, episodes: int) -> None:
+    """Raise ConfigError if the games ``first..first + episodes - 1`` include a training game
+    of ``config``'s model or a validation game that chose it."""
+    games = range(first, first + episodes)
+    for name, seeds in (
+        ("training", range(config.seed, config.seed + config.training_seeds)),
+        ("validation", getattr(config, "validation_seeds", range(0))),
+    ):
+        if seeds and games.start < seeds.stop and seeds.start < games.stop:
+            raise ConfigError(
+                f"seeds {games.start}..{games.stop - 1} overlap the {name} seeds "
+                f"{seeds.start}..{seeds.stop - 1}"
+            )
+
+
 def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
     """The stable-baselines3 parts: algorithm, policy, its options, the torch device."""
     if config.algo not in ALGORITHMS:
@@ -321,6 +368,7 @@ def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
         obs_type = config.env.kwargs.get("obs_type", "state")
         fail("policy", f"{config.policy} does not fit obs_type {obs_type!r}")
     _check_imitation(config, fail)
+    _check_validation(config, fail)
 
 
 def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> None:

@@ -51,6 +51,7 @@ from agents.config import (
     ConfigError,
     TrainConfig,
     algorithm_class,
+    check_evaluation_seeds,
     config_from_dict,
     load_config,
     load_run_config,
@@ -196,13 +197,8 @@ def evaluate(
             return act
 
     first = config.eval_seed if seed is None else seed
-    if model_path is not None and (
-        first < config.seed + config.training_seeds and config.seed < first + episodes
-    ):
-        raise ConfigError(
-            f"seeds {first}..{first + episodes - 1} overlap the training seeds "
-            f"{config.seed}..{config.seed + config.training_seeds - 1}"
-        )
+    if model_path is not None:
+        check_evaluation_seeds(config, first, episodes)
     seeds = list(range(first, first + episodes))
     venv = make_env(config, num_envs=episodes, seed=first, stats=stats)
     rows = rollouts(venv, make_policy(venv, first), seeds)
@@ -279,13 +275,14 @@ def baselines_for(run: Path) -> dict[str, float]:
 
 
 def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> None:
-    """The training games' mean score (``rollout/ep_score_mean``) against frames played."""
+    """The training games' mean score (``rollout/ep_score_mean``) against frames played, and
+    the validation games' (``validation.csv``) when the run has them."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from agents.train import progress_rows
+    from agents.train import VALIDATION_FILE, progress_rows
 
     config = load_run_config(run)
     rows = [row for row in progress_rows(run) if row.get("rollout/ep_score_mean")]
@@ -298,6 +295,13 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
     scores = [float(row["rollout/ep_score_mean"]) for row in rows]
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
     ax.plot(frames, scores, label=f"{config.algo.upper()} (training games, last 100)")
+    validation = run / VALIDATION_FILE
+    if validation.is_file():
+        with open(validation) as file:
+            checks = list(csv.DictReader(file))
+        ax.plot([float(row["frames"]) for row in checks],
+                [float(row["score_mean"]) for row in checks], "o", markersize=4,
+                label=f"validation games ({config.validate_episodes})")  # fmt: skip
     for (name, score), style in zip(baselines.items(), ("--", ":"), strict=False):
         ax.axhline(score, linestyle=style, color="grey", label=f"{name} (evaluation)")
     ax.set_xlabel("frames played (1/60 s each)")

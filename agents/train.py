@@ -9,14 +9,19 @@ exact config (``config.yaml``), ``meta.json`` (package versions, command), Tenso
 ``checkpoint_every`` env steps (``checkpoints/step_N.zip``), and the final ``model.zip`` (with
 ``model_vecnormalize.pkl`` when the config normalises). ``--resume RUN`` continues a run from
 its last checkpoint with the same config. Training stops at ``total_timesteps`` or after
-``max_minutes`` of wall time. ``--report`` then evaluates the model against the random and
-heuristic baselines and writes the report into the run folder (see ``agents.evaluate``).
+``max_minutes`` of wall time. With ``validate_every``, the model plays the validation games
+(``validate_seed`` on) every that many steps and at the end; the scores go to
+``validation.csv``, the best model so far to ``best_model.zip``, and the best of all becomes
+``model.zip`` (the last one stays in ``checkpoints/``). ``--report`` then evaluates the model
+against the random and heuristic baselines and writes the report into the run folder (see
+``agents.evaluate``).
 
 Models are pickles inside zips: load only models you trust.
 """
 
 import argparse
 import collections
+import copy
 import csv
 import shutil
 import sys
@@ -30,6 +35,8 @@ from agents.common import (
     CHECKPOINTS,
     CONFIG_FILE,
     MODEL_FILE,
+    STATS_FILE,
+    atomic_write,
     latest_checkpoint,
     make_env,
     save_model,
@@ -40,19 +47,97 @@ from agents.config import (
     ConfigError,
     TrainConfig,
     algorithm_class,
+    check_evaluation_seeds,
     load_config,
     sb3_hyperparams,
 )
 from agents.imitation import imitate
 
+VALIDATION_FILE = "validation.csv"
+BEST_MODEL = "best_model"
+
+
+class Validation:
+    """The validation games of a run: ``validate_episodes`` whole games from ``validate_seed``
+    on, the same games each time, played deterministically by the model being trained through
+    a copy of its env chain (``VecNormalize``'s statistics frozen at their current values).
+    Each result is a row of ``RUN/validation.csv``; the best model so far is kept as
+    ``RUN/best_model.zip`` (a resumed run goes on from the rows already written)."""
+
+    FIELDS = ("steps", "frames", "score_mean", "score_low", "score_high", "length_mean",
+              "truncated_share")  # fmt: skip
+
+    def __init__(self, config: TrainConfig, run: Path) -> None:
+        self.config, self.run = config, run
+        self.venv: Any = None
+        self.rows: list[dict[str, Any]] = []
+        if (run / VALIDATION_FILE).is_file():
+            with open(run / VALIDATION_FILE) as file:
+                self.rows = [
+                    {key: (int if key in ("steps", "frames") else float)(value)
+                     for key, value in row.items()}
+                    for row in csv.DictReader(file)
+                ]  # fmt: skip
+
+    @property
+    def best(self) -> dict[str, float] | None:
+        """The row of the best validation so far (the earliest of equals), or None."""
+        return max(self.rows, key=lambda row: row["score_mean"], default=None)
+
+    def __call__(self, model: Any, frames: int) -> dict[str, float]:
+        """Validate ``model`` (``frames`` played in training so far); returns its row."""
+        from agents.evaluate import model_policy, rollouts, summarize
+
+        games = self.config.validation_seeds
+        if self.venv is None:
+            self.venv = make_env(self.config, num_envs=len(games), seed=games.start)
+        if hasattr(self.venv, "obs_rms"):
+            self.venv.obs_rms = copy.deepcopy(model.get_env().obs_rms)
+            self.venv.training = False  # (before the reset, which would update them)
+            self.venv.norm_reward = False
+        self.venv.seed(games.start)  # the same games every time
+        summary = summarize(rollouts(self.venv, model_policy(model), list(games)))
+        best = self.best
+        row = {
+            "steps": model.num_timesteps, "frames": frames,
+            "score_mean": round(summary["score_mean"], 2),
+            "score_low": round(summary["score_ci95"][0], 2),
+            "score_high": round(summary["score_ci95"][1], 2),
+            "length_mean": round(summary["length_mean"], 2),
+            "truncated_share": summary["truncated_share"],
+        }  # fmt: skip
+        if best is None or row["score_mean"] > best["score_mean"]:
+            save_model(model, self.run, BEST_MODEL)
+        self.rows.append(row)
+        with open(self.run / VALIDATION_FILE, "w", newline="") as file:
+            writer = csv.DictWriter(file, fieldnames=self.FIELDS)
+            writer.writeheader()
+            writer.writerows(self.rows)
+        print(
+            f"validation at {row['steps']} steps: score {row['score_mean']:.0f} (95% CI "
+            f"{row['score_low']:.0f}-{row['score_high']:.0f}) over {len(games)} games; best "
+            f"{max(row['score_mean'], best['score_mean'] if best else row['score_mean']):.0f}"
+        )
+        return row
+
+    def close(self) -> None:
+        if self.venv is not None:
+            self.venv.close()
+
 
 def make_callback(
-    config: TrainConfig, run: Path, frames: int = 0, started: float | None = None
+    config: TrainConfig,
+    run: Path,
+    frames: int = 0,
+    started: float | None = None,
+    validation: Validation | None = None,
 ) -> Any:
-    """Checkpoints every ``checkpoint_every`` env steps, the mean game score of the last 100
-    training games logged as ``rollout/ep_score_mean`` (the score, not the shaped return), the
-    frames played by all envs as ``time/frames`` (counted on from ``frames``), and the stop at
-    ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning starts)."""
+    """Checkpoints every ``checkpoint_every`` env steps, ``validation`` every
+    ``validate_every`` (its score logged as ``validation/score_mean``), the mean game score of
+    the last 100 training games logged as ``rollout/ep_score_mean`` (the score, not the shaped
+    return), the frames played by all envs as ``time/frames`` (counted on from ``frames``), and
+    the stop at ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning
+    starts)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class TrainingCallback(BaseCallback):
@@ -61,12 +146,13 @@ def make_callback(
             self.scores: collections.deque = collections.deque(maxlen=100)
             self.truncated: collections.deque = collections.deque(maxlen=100)
             self.next_checkpoint = 0
+            self.next_validation = 0
             self.frames = frames
             self.game_frames = np.zeros(config.env.num_envs, dtype=np.int64)  # of each game
 
         def _on_training_start(self) -> None:
-            every = config.checkpoint_every
-            self.next_checkpoint = (self.num_timesteps // every + 1) * every if every else 0
+            self.next_checkpoint = self._next(config.checkpoint_every)
+            self.next_validation = self._next(config.validate_every if validation else 0)
             self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
 
         def _on_step(self) -> bool:
@@ -81,7 +167,15 @@ def make_callback(
             if self.next_checkpoint and self.num_timesteps >= self.next_checkpoint:
                 save_model(self.model, run / CHECKPOINTS, f"step_{self.num_timesteps}")
                 self.next_checkpoint += config.checkpoint_every
+            if self.next_validation and self.num_timesteps >= self.next_validation:
+                row = validation(self.model, self.frames)
+                self.logger.record("validation/score_mean", row["score_mean"])
+                self.next_validation += config.validate_every
             return not config.max_minutes or time.monotonic() < self.deadline
+
+        def _next(self, every: int) -> int:
+            """The first multiple of ``every`` past the steps done (0: never)."""
+            return (self.num_timesteps // every + 1) * every if every else 0
 
         def _on_rollout_end(self) -> None:
             self.logger.record("time/frames", self.frames)
@@ -169,17 +263,35 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
         for key in ("steps", "frames", "accuracy", "value_loss", "seconds"):
             model.logger.record(f"imitation/{key}", fit[key])
         frames = fit["frames"]
+    validation = Validation(config, run) if config.validate_every else None
+    callback = make_callback(config, run, frames, started, validation)
     left = config.total_timesteps - model.num_timesteps
     if left > 0:
         model.learn(
-            left, callback=make_callback(config, run, frames, started),
-            reset_num_timesteps=not resume, progress_bar=progress_bar,
+            left, callback=callback, reset_num_timesteps=not resume, progress_bar=progress_bar
         )  # fmt: skip
     # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.
     save_model(model, run / CHECKPOINTS, f"step_{model.num_timesteps}")
     save_model(model, run, Path(MODEL_FILE).stem)
+    if validation is not None:
+        if validation.best is None or validation.rows[-1]["steps"] != model.num_timesteps:
+            validation(model, callback.frames)
+        validation.close()
+        keep_best(run, validation.best)
     venv.close()
     return run / MODEL_FILE
+
+
+def keep_best(run: Path, best: dict[str, float]) -> None:
+    """Make the best validated model (``best_model.zip``) the run's ``model.zip``."""
+    for name in (f"{BEST_MODEL}_{STATS_FILE}", f"{BEST_MODEL}.zip"):  # as save_model does
+        if (run / name).exists():
+            target = run / name.replace(BEST_MODEL, Path(MODEL_FILE).stem)
+            atomic_write(target, lambda file, source=run / name: file.write(source.read_bytes()))
+    print(
+        f"model: the best on the validation games, at {int(best['steps'])} steps "
+        f"(score {best['score_mean']:.0f}); the last is in {CHECKPOINTS}/"
+    )
 
 
 def main(argv: list[str] | None = None) -> Path:
@@ -204,6 +316,9 @@ def main(argv: list[str] | None = None) -> Path:
             raise ConfigError("give --config FILE (or --resume RUN)")
         else:
             config = load_config(args.config, args.overrides)
+        if args.report:  # before training: the report's games must be new to the model
+            check_evaluation_seeds(config, config.eval_seed, args.episodes)
+        if args.resume is None:
             run = start(config, args.runs, sys.argv if argv is None else argv)
         print(f"run folder: {run}")
         try:

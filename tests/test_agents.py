@@ -200,6 +200,10 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["imitation_steps=100", "algo=dqn", "hyperparams={}"], "needs an actor-critic"),
         (["imitation_steps=100", "env.kwargs.action_type=multibinary"], "needs discrete actions"),
         (["imitation_steps=100", "env.frame_stack=2"], "needs state observations"),
+        (["validate_every=-1"], "validate_every: must be an integer >= 0"),
+        (["validate_every=9", "validate_episodes=0"], "validate_episodes: must be an integer >= 1"),
+        (["validate_every=9", "validate_seed=31"], "validate_seed: 31 overlaps the training seeds"),
+        (["validate_every=9", "validate_seed=99999"], "games 99999..100098 hold eval_seed 100000"),
     ],
 )
 def test_bad_configs_are_rejected_naming_the_key(overrides, message):
@@ -299,6 +303,62 @@ def test_a_checkpoint_evaluates_and_a_curve_brings_its_baselines(tmp_path):
     evaluate.main(["--model", str(run), "--episodes", "1", "--curve", "--out", str(tmp_path / "e")])
     assert (tmp_path / "e/learning_curve.png").read_bytes()[:4] == b"\x89PNG"
     assert {p.name for p in (tmp_path / "e").iterdir()} >= {"random", "heuristic"}
+
+
+def test_validation_keeps_the_best_model_and_goes_on_after_a_resume(tmp_path, capsys):
+    from stable_baselines3 import PPO
+
+    games = ["validate_every=128", "validate_episodes=3"]
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", *games)
+    with open(run / "validation.csv") as file:
+        rows = list(csv.DictReader(file))
+    assert [int(row["steps"]) for row in rows] == [128, 256]  # the last one: the final model
+    best = max(rows, key=lambda row: float(row["score_mean"]))
+    assert (run / "model.zip").read_bytes() == (run / "best_model.zip").read_bytes()
+    assert PPO.load(run / "model.zip").num_timesteps == int(best["steps"])
+    assert f"at {best['steps']} steps" in capsys.readouterr().out
+    # The model replays its validation games through its saved chain, to the same scores.
+    model, config, path = evaluate.load_model(run)
+    venv = make_env(
+        config, num_envs=3, seed=300_000, stats=path.with_name("model_vecnormalize.pkl")
+    )
+    replayed = evaluate.rollouts(venv, evaluate.model_policy(model), [300_000, 300_001, 300_002])
+    assert np.mean([row["score"] for row in replayed]) == pytest.approx(
+        float(best["score_mean"]), abs=0.01
+    )
+    # Those games chose the model: they are not evaluation games.
+    with pytest.raises(SystemExit):
+        evaluate.main(["--model", str(run), "--episodes", "5", "--seed", "299998"])
+    assert "overlap the validation seeds 300000..300002" in capsys.readouterr().err
+    # Killed after the first checkpoint and validation: the resume validates on.
+    for path in [*run.glob("model*"), *(run / "checkpoints").glob("step_256*")]:
+        path.unlink()
+    (run / "validation.csv").write_text("".join((run / "validation.csv").open().readlines()[:2]))
+    train.main(["--resume", str(run), "--no-progress"])
+    with open(run / "validation.csv") as file:
+        assert [row["steps"] for row in csv.DictReader(file)] == ["128", "256"]
+    assert (run / "model.zip").is_file()
+
+
+def test_report_games_that_validated_the_model_are_refused_before_training(tmp_path, capsys):
+    runs = tmp_path / "runs"
+    argv = [
+        "--config",
+        str(ROOT / "configs/agents/ppo.yaml"),
+        "validate_every=128",
+        "validate_seed=100100",
+        "--runs",
+        str(runs),
+        "--report",
+        "--episodes",
+        "101",
+    ]
+    with pytest.raises(SystemExit):
+        train.main(argv)  # fmt: skip
+    assert "seeds 100000..100100 overlap the validation seeds 100100..100199" in (
+        capsys.readouterr().err
+    )
+    assert not runs.exists()
 
 
 def test_discounted_returns_restart_at_each_game_end():
