@@ -72,6 +72,20 @@ def make_env(
     return venv
 
 
+class FrameCounter:
+    """The frames played by all envs of a VecEnv, counted from each step's infos (a step's
+    frames vary with the frame skip, ``skip_above`` and the end of a game)."""
+
+    def __init__(self, num_envs: int, frames: int = 0) -> None:
+        self.frames = frames
+        self.game_frames = np.zeros(num_envs, dtype=np.int64)  # of each env's game, last step
+
+    def update(self, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
+        for env, (done, info) in enumerate(zip(dones, infos, strict=True)):
+            self.frames += int(info["frames"] - self.game_frames[env])
+            self.game_frames[env] = 0 if done else info["frames"]
+
+
 def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
     """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
     n = venv.num_envs

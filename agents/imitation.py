@@ -18,13 +18,14 @@ from typing import Any
 
 import numpy as np
 
+from agents.common import FrameCounter
 from pinball_env.heuristic import HeuristicPolicy
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 
 BATCH_SIZE = 512
 
 
-def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
+def teacher_games(venv: Any, steps: int) -> dict[str, Any]:
     """The heuristic's play for ``steps`` steps of each env of ``venv`` (an SB3 VecEnv,
     possibly ``VecNormalize``, whose statistics learn from it): per step and env, the raw
     observation, the action, the raw reward and whether the game ended. Also ``frames``: the
@@ -36,8 +37,7 @@ def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
     raw = getattr(venv, "get_original_obs", None)
     obs = venv.reset()
     observations, actions, rewards, dones = [], [], [], []
-    game_frames = np.zeros(n, dtype=np.int64)  # of each env's game, at the last step
-    frames = 0
+    frames = FrameCounter(n)
     for _ in range(steps):
         observations.append(raw() if raw else obs)
         action = np.array([
@@ -49,9 +49,7 @@ def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
         actions.append(action)
         rewards.append(venv.get_original_reward() if raw else reward)
         dones.append(done)
-        for env in range(n):
-            frames += infos[env]["frames"] - game_frames[env]
-            game_frames[env] = 0 if done[env] else infos[env]["frames"]
+        frames.update(done, infos)
         for env in np.flatnonzero(done):  # a new game (maybe on a new table): a new player
             players[env] = HeuristicPolicy(game.world.table_of(env))
     return {
@@ -59,7 +57,7 @@ def teacher_games(venv: Any, steps: int) -> dict[str, np.ndarray]:
         "actions": np.stack(actions),
         "rewards": np.stack(rewards),
         "dones": np.stack(dones),
-        "frames": np.array(frames),
+        "frames": frames.frames,
     }
 
 
@@ -114,7 +112,7 @@ def imitate(model: Any, venv: Any, steps: int, epochs: int, seed: int) -> dict[s
         values = policy.predict_values(obs_t).flatten()
     return {
         "steps": len(actions),
-        "frames": int(games["frames"]),
+        "frames": games["frames"],
         "accuracy": float((chosen == actions_t).float().mean()),
         "value_loss": float(torch.mean((values - returns_t) ** 2)),
         "seconds": time.monotonic() - start,

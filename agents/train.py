@@ -36,6 +36,7 @@ from agents.common import (
     CONFIG_FILE,
     MODEL_FILE,
     STATS_FILE,
+    FrameCounter,
     atomic_write,
     latest_checkpoint,
     make_env,
@@ -147,8 +148,7 @@ def make_callback(
             self.truncated: collections.deque = collections.deque(maxlen=100)
             self.next_checkpoint = 0
             self.next_validation = 0
-            self.frames = frames
-            self.game_frames = np.zeros(config.env.num_envs, dtype=np.int64)  # of each game
+            self.counter = FrameCounter(config.env.num_envs, frames)
 
         def _on_training_start(self) -> None:
             self.next_checkpoint = self._next(config.checkpoint_every)
@@ -156,19 +156,16 @@ def make_callback(
             self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
 
         def _on_step(self) -> bool:
-            infos = self.locals["infos"]
-            for env, (done, info) in enumerate(zip(self.locals["dones"], infos, strict=True)):
-                # A step's frames vary with skip_above and the end of a game: count them.
-                self.frames += info["frames"] - self.game_frames[env]
-                self.game_frames[env] = 0 if done else info["frames"]
-                if done:
-                    self.scores.append(info["score"])
-                    self.truncated.append(info.get("TimeLimit.truncated", False))
+            dones, infos = self.locals["dones"], self.locals["infos"]
+            self.counter.update(dones, infos)
+            for env in np.flatnonzero(dones):
+                self.scores.append(infos[env]["score"])
+                self.truncated.append(infos[env].get("TimeLimit.truncated", False))
             if self.next_checkpoint and self.num_timesteps >= self.next_checkpoint:
                 save_model(self.model, run / CHECKPOINTS, f"step_{self.num_timesteps}")
                 self.next_checkpoint += config.checkpoint_every
             if self.next_validation and self.num_timesteps >= self.next_validation:
-                row = validation(self.model, self.frames)
+                row = validation(self.model, self.counter.frames)
                 self.logger.record("validation/score_mean", row["score_mean"])
                 self.next_validation += config.validate_every
             return not config.max_minutes or time.monotonic() < self.deadline
@@ -178,7 +175,7 @@ def make_callback(
             return (self.num_timesteps // every + 1) * every if every else 0
 
         def _on_rollout_end(self) -> None:
-            self.logger.record("time/frames", self.frames)
+            self.logger.record("time/frames", self.counter.frames)
             if self.scores:
                 self.logger.record("rollout/ep_score_mean", float(np.mean(self.scores)))
                 self.logger.record("rollout/ep_truncated", float(np.mean(self.truncated)))
@@ -275,7 +272,7 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
     save_model(model, run, Path(MODEL_FILE).stem)
     if validation is not None:
         if validation.best is None or validation.rows[-1]["steps"] != model.num_timesteps:
-            validation(model, callback.frames)
+            validation(model, callback.counter.frames)
         validation.close()
         keep_best(run, validation.best)
     venv.close()
