@@ -30,8 +30,9 @@ TINY = {
 def tiny_overrides(config: Path) -> list[str]:
     data = yaml.safe_load(config.read_text())
     warm = ["imitation_steps=64"] if data.get("imitation_steps") else []
+    validation = ["validate_episodes=2"] if data.get("validate_every") else []
     return ["total_timesteps=256", "env.num_envs=2", "checkpoint_every=128", *TINY[data["algo"]],
-            *warm]  # fmt: skip
+            *warm, *validation]  # fmt: skip
 
 
 def tiny_run(config: Path, runs: Path, *extra: str) -> Path:
@@ -203,7 +204,7 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["validate_every=-1"], "validate_every: must be an integer >= 0"),
         (["validate_every=9", "validate_episodes=0"], "validate_episodes: must be an integer >= 1"),
         (["validate_every=9", "validate_seed=31"], "validate_seed: 31 overlaps the training seeds"),
-        (["validate_every=9", "validate_seed=99999"], "games 99999..100098 hold eval_seed 100000"),
+        (["validate_every=9", "validate_seed=99999"], "games 99999..100198 hold eval_seed 100000"),
     ],
 )
 def test_bad_configs_are_rejected_naming_the_key(overrides, message):
@@ -347,6 +348,7 @@ def test_report_games_that_validated_the_model_are_refused_before_training(tmp_p
         str(ROOT / "configs/agents/ppo.yaml"),
         "validate_every=128",
         "validate_seed=100100",
+        "validate_episodes=100",
         "--runs",
         str(runs),
         "--report",
