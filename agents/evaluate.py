@@ -302,6 +302,9 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
         ax.plot([float(row["frames"]) for row in checks],
                 [float(row["score_mean"]) for row in checks], "o", markersize=4,
                 label=f"validation games ({config.validate_episodes})")  # fmt: skip
+        chosen = max(checks, key=lambda row: float(row["score_mean"]))  # as agents.train keeps
+        ax.plot(float(chosen["frames"]), float(chosen["score_mean"]), "*", color="black",
+                markersize=11, label=f"the model (at {int(chosen['steps']):,} steps)")  # fmt: skip
     for (name, score), style in zip(baselines.items(), ("--", ":"), strict=False):
         ax.axhline(score, linestyle=style, color="grey", label=f"{name} (evaluation)")
     ax.set_xlabel("frames played (1/60 s each)")
