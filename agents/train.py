@@ -23,6 +23,7 @@ import argparse
 import collections
 import copy
 import csv
+import io
 import shutil
 import sys
 import time
@@ -81,7 +82,7 @@ class Validation:
                 ]  # fmt: skip
 
     @property
-    def best(self) -> dict[str, float] | None:
+    def best(self) -> dict[str, Any] | None:
         """The row of the best validation so far (the earliest of equals), or None."""
         return max(self.rows, key=lambda row: row["score_mean"], default=None)
 
@@ -110,14 +111,15 @@ class Validation:
         if best is None or row["score_mean"] > best["score_mean"]:
             save_model(model, self.run, BEST_MODEL)
         self.rows.append(row)
-        with open(self.run / VALIDATION_FILE, "w", newline="") as file:
-            writer = csv.DictWriter(file, fieldnames=self.FIELDS)
-            writer.writeheader()
-            writer.writerows(self.rows)
+        table = io.StringIO()
+        writer = csv.DictWriter(table, fieldnames=self.FIELDS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(self.rows)
+        atomic_write(self.run / VALIDATION_FILE, lambda file: file.write(table.getvalue().encode()))
         print(
             f"validation at {row['steps']} steps: score {row['score_mean']:.0f} (95% CI "
             f"{row['score_low']:.0f}-{row['score_high']:.0f}) over {len(games)} games; best "
-            f"{max(row['score_mean'], best['score_mean'] if best else row['score_mean']):.0f}"
+            f"{self.best['score_mean']:.0f}"
         )
         return row
 
@@ -271,7 +273,7 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
     save_model(model, run / CHECKPOINTS, f"step_{model.num_timesteps}")
     save_model(model, run, Path(MODEL_FILE).stem)
     if validation is not None:
-        if validation.best is None or validation.rows[-1]["steps"] != model.num_timesteps:
+        if not validation.rows or validation.rows[-1]["steps"] != model.num_timesteps:
             validation(model, callback.counter.frames)
         validation.close()
         keep_best(run, validation.best)
@@ -279,7 +281,7 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
     return run / MODEL_FILE
 
 
-def keep_best(run: Path, best: dict[str, float]) -> None:
+def keep_best(run: Path, best: dict[str, Any]) -> None:
     """Make the best validated model (``best_model.zip``) the run's ``model.zip``."""
     for name in (f"{BEST_MODEL}_{STATS_FILE}", f"{BEST_MODEL}.zip"):  # as save_model does
         if (run / name).exists():
