@@ -14,7 +14,8 @@ frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/P
   length (frames), balls lost and whether the time limit truncated it;
 - ``summary.json``: mean, std and 95% confidence interval of the score (normal approximation),
   mean return and length, share truncated;
-- with ``--video PATH``: the first game as an MP4 or GIF (by the suffix), score on screen;
+- with ``--video PATH``: the first game as an MP4 or GIF (by the suffix), score on screen,
+  every frame of it (every third in a GIF), those a step runs on included;
 - with ``--curve`` (a run): ``learning_curve.png``, the training games' mean score against
   frames, with the random and heuristic baselines drawn in (from the run's report, or played
   on the same games, their results in ``OUT/random`` and ``OUT/heuristic``).
@@ -243,7 +244,8 @@ def record_video(
 
     venv = make_env(config, num_envs=1, seed=seed, stats=stats, render=True)
     act = make_policy(venv, seed)
-    fps = venv.get_attr("metadata")[0]["render_fps"]  # frames per step shown
+    game = venv.get_attr("game")[0]
+    fps = game.table.simulation.frame_rate  # every frame is recorded, those a step runs on too
     stride = max(1, round(fps / 20)) if path.suffix.lower() == ".gif" else 1  # small GIFs
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() == ".gif":
@@ -253,11 +255,17 @@ def record_video(
     obs = venv.reset()
     infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
     frames = 0
+
+    def record() -> None:  # every frame, those a step runs on (frame skip, skip_above) too
+        nonlocal frames
+        if frames % stride == 0:
+            writer.append_data(venv.get_images()[0])
+        frames += 1
+
     with writer:  # frames are written as they come: a whole game would not fit in memory
+        record()
+        game.on_frame = record
         while True:
-            if frames % stride == 0:
-                writer.append_data(venv.get_images()[0])
-            frames += 1
             obs, _, dones, infos = venv.step(act(obs, infos))
             if dones[0]:
                 break

@@ -12,7 +12,7 @@ snapshotted and restored as one object.
 import math
 import numbers
 import reprlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -195,6 +195,8 @@ class Game:
         self._everyone = np.ones(n_envs, dtype=bool)
         self._rules: Rules | None = None  # the step loop's numbers (see _rules_now)
         self._play: dict[type, Any] = {}  # _play_frames's compiled entries (compiled_entry)
+        # Called after each frame's physics, when set: to record the frames a step runs on.
+        self.on_frame: Callable[[], None] | None = None
         self._progress = StepProgress(
             stage=np.zeros(n_envs, dtype=np.int64),
             frames=np.zeros(n_envs, dtype=np.int64),
@@ -241,6 +243,7 @@ class Game:
         state = self.__dict__.copy()
         state["_play"] = {}  # compiled entries cannot be pickled; a copy finds its own
         state["_rules"] = None  # a copy makes its own, over its own arrays
+        state["on_frame"] = None  # a recorder's, not the game's
         return state
 
     @property
@@ -354,7 +357,8 @@ class Game:
 
         Each env's frames run in one compiled loop (:func:`_play_frames`), which comes back
         here only for launches (they draw from the env's random stream), and, with a physics
-        backend other than the swept kernel, for each frame's physics.
+        backend other than the swept kernel or with :attr:`on_frame` set, for each frame's
+        physics; ``on_frame()`` is then called after it (the frame's points not yet counted).
 
         Returns ``(reward, game_over)``, (n_envs,) float64 and bool, the reward summed over the
         frames. The step's points and drains (summed) are in :attr:`state`.
@@ -365,8 +369,11 @@ class Game:
         progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
         rules = self._rules_now()
         geometries, settings = self.world.tables()
+        # With on_frame the loop hands each frame's physics to Python (the same kernel), and the
+        # hook sees the frame.
+        swept = self.world.swept_kernel and self.on_frame is None
         args = (geometries, settings, self.state, self.world.scratch, progress, rules, commands,
-                self.world.swept_kernel)  # fmt: skip
+                swept)  # fmt: skip
         play = self._play.get(type(geometries))  # one table (tuples) or one per env (lists)
         if play is None:
             play = self._play[type(geometries)] = compiled_entry(_play_frames, (*args, 0, 0))
@@ -379,6 +386,8 @@ class Game:
             if physics.any():
                 self.world.step(None, physics)
                 progress.stage[physics] = AFTER_PHYSICS
+                if self.on_frame is not None:
+                    self.on_frame()
             launches = np.flatnonzero(progress.launch)
             for env in launches:
                 self.launch(env, rngs[env])

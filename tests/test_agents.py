@@ -157,6 +157,12 @@ def test_baselines_evaluate_with_video(tmp_path):
     )  # fmt: skip
     assert summary["policy"] == "heuristic" and summary["episodes"] == 2
     assert (tmp_path / "game.gif").read_bytes()[:6] == b"GIF89a"
+    with open(tmp_path / "h" / "episodes.csv") as file:
+        length = int(next(csv.DictReader(file))["length"])  # the recorded game, seed 100000
+    import imageio.v3 as iio
+
+    # Every third frame of the game, and the first: the frames steps run on are in it too.
+    assert len(iio.imread(tmp_path / "game.gif", index=None)) == -(-(length + 1) // 3)
     random = evaluate.main(
         ["--policy", "random", "--episodes", "2", "--out", str(tmp_path / "r"),
          "--video", str(tmp_path / "game.mp4")]
@@ -172,7 +178,12 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
     assert set(report) == {"random", "heuristic", "model"}
     assert json.loads((run / "report.json").read_text()) == report
     assert (run / "learning_curve.png").read_bytes()[:4] == b"\x89PNG"
-    assert (run / "game.gif").is_file()
+    with open(run / "eval" / "model" / "episodes.csv") as file:
+        length = int(next(csv.DictReader(file))["length"])  # the recorded game
+    import imageio.v3 as iio
+
+    # Every third frame, those that steps run on while the ball is high (skip_above) too.
+    assert len(iio.imread(run / "game.gif", index=None)) == -(-(length + 1) // 3)
 
 
 @pytest.mark.parametrize(

@@ -189,16 +189,22 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
 
 
 @pytest.mark.parametrize("num_threads", [1, 2])
-def test_the_compiled_step_loop_plays_the_frame_by_frame_loop_bitwise(num_threads):
-    # The swept kernel's envs play their steps in one compiled loop; other physics backends
-    # go frame by frame with the same rules. Both ways, on the swept physics, are one game:
-    # launches after drains, a ball search (env 0's ball rests on the plunger), the time limit.
+@pytest.mark.parametrize("framed_by", ["backend", "on_frame"])
+def test_the_compiled_step_loop_plays_the_frame_by_frame_loop_bitwise(num_threads, framed_by):
+    # The swept kernel's envs play their steps in one compiled loop; other physics backends,
+    # or a recorder's on_frame hook, go frame by frame with the same rules. Both ways, on the
+    # swept physics, are one game: launches after drains, a ball search (env 0's ball rests on
+    # the plunger), the time limit.
     kwargs = {"frame_skip": 2, "skip_above": 0.26, "height_shaping": 1.0, "drain_penalty": 5.0,
               "max_frames": 1500, "balls_per_game": 2}  # fmt: skip
     n = len(SEEDS)
     compiled = Game(CLASSIC, n_envs=n, num_threads=num_threads, **kwargs)
     framing = Game(CLASSIC, n_envs=n, **kwargs)
-    framing.world.swept_kernel = False  # as the pymunk backend's world
+    hooked = []  # the game's frame count of each env at each call of on_frame
+    if framed_by == "backend":
+        framing.world.swept_kernel = False  # as the pymunk backend's world
+    else:
+        framing.on_frame = lambda: hooked.append(framing.state.frames.copy())
     rngs = {game: [np.random.default_rng(seed) for seed in SEEDS] for game in (compiled, framing)}
     for game in (compiled, framing):
         game.new_game(0, rngs[game][0], {"ball_velocity": [0.0, 0.0]})
@@ -221,6 +227,12 @@ def test_the_compiled_step_loop_plays_the_frame_by_frame_loop_bitwise(num_thread
     first = next(step for step in range(1, len(heights)) if heights[step] > heights[0] + 0.1)
     info = traces[compiled][first][3]
     assert info["balls_left"][0] == 2 and info["frames"][0] >= compiled.ball_search_frames
+    if framed_by == "on_frame":  # once per frame: each step, as often as its longest env's
+        played, before = 0, np.zeros(n, dtype=np.int64)
+        for _, _, over, info in traces[framing]:
+            played += int((info["frames"] - before).max())
+            before = np.where(over, 0, info["frames"])
+        assert len(hooked) == played > 900
 
 
 def test_a_game_runs_out_of_time_at_max_frames_exactly():
