@@ -281,8 +281,7 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
         raise ConfigError(f"{source}: {key}: {problem}")
 
     def integer(key: str, value: Any, low: int) -> None:
-        if not isinstance(value, int) or isinstance(value, bool) or value < low:
-            fail(key, f"must be an integer >= {low}, got {value!r}")
+        _check_integer(fail, key, value, low)
 
     integer("total_timesteps", config.total_timesteps, 1)
     integer("seed", config.seed, 0)
@@ -313,12 +312,15 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
     _check_env(config.env, fail)
 
 
+def _check_integer(fail: Callable[[str, str], None], key: str, value: Any, low: int) -> None:
+    if not isinstance(value, int) or isinstance(value, bool) or value < low:
+        fail(key, f"must be an integer >= {low}, got {value!r}")
+
+
 def _check_validation(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
     """Validation games: counts, and seeds apart from the training and evaluation games."""
     for key, low in (("validate_every", 0), ("validate_episodes", 1), ("validate_seed", 0)):
-        value = getattr(config, key)
-        if not isinstance(value, int) or isinstance(value, bool) or value < low:
-            fail(key, f"must be an integer >= {low}, got {value!r}")
+        _check_integer(fail, key, getattr(config, key), low)
     games = config.validation_seeds
     if not games:
         return
@@ -375,9 +377,7 @@ def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> N
     """The warm start: a count of steps and epochs, for an actor-critic on state observations
     with discrete actions (the heuristic's)."""
     for key, low in (("imitation_steps", 0), ("imitation_epochs", 1)):
-        value = getattr(config, key)
-        if not isinstance(value, int) or isinstance(value, bool) or value < low:
-            fail(key, f"must be an integer >= {low}, got {value!r}")
+        _check_integer(fail, key, getattr(config, key), low)
     if not config.imitation_steps:
         return
     if config.algo not in ("ppo", "a2c"):

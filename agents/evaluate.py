@@ -290,7 +290,7 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from agents.train import VALIDATION_FILE, progress_rows
+    from agents.train import Validation, progress_rows
 
     config = load_run_config(run)
     rows = [row for row in progress_rows(run) if row.get("rollout/ep_score_mean")]
@@ -303,16 +303,14 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
     scores = [float(row["rollout/ep_score_mean"]) for row in rows]
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
     ax.plot(frames, scores, label=f"{config.algo.upper()} (training games, last 100)")
-    validation = run / VALIDATION_FILE
-    if validation.is_file():
-        with open(validation) as file:
-            checks = list(csv.DictReader(file))
-        ax.plot([float(row["frames"]) for row in checks],
-                [float(row["score_mean"]) for row in checks], "o", markersize=4,
+    checks = Validation(config, run)  # the run's validations, read back (none: no file)
+    if checks.rows:
+        ax.plot([row["frames"] for row in checks.rows],
+                [row["score_mean"] for row in checks.rows], "o", markersize=4,
                 label=f"validation games ({config.validate_episodes})")  # fmt: skip
-        chosen = max(checks, key=lambda row: float(row["score_mean"]))  # as agents.train keeps
-        ax.plot(float(chosen["frames"]), float(chosen["score_mean"]), "*", color="black",
-                markersize=11, label=f"the model (at {int(chosen['steps']):,} steps)")  # fmt: skip
+        chosen = checks.best  # the run's model
+        ax.plot(chosen["frames"], chosen["score_mean"], "*", color="black", markersize=11,
+                label=f"the model (at {chosen['steps']:,} steps)")  # fmt: skip
     for (name, score), style in zip(baselines.items(), ("--", ":"), strict=False):
         ax.axhline(score, linestyle=style, color="grey", label=f"{name} (evaluation)")
     ax.set_xlabel("frames played (1/60 s each)")
