@@ -11,6 +11,7 @@ on top of the file::
 RLlib run (``agents.rllib``); both share :class:`EnvConfig` and the checks of the env.
 """
 
+import copy
 import dataclasses
 import inspect
 import math
@@ -482,8 +483,10 @@ def sb3_hyperparams(config: TrainConfig) -> dict[str, Any]:
     def linear(start: float) -> Callable[[float], float]:
         return lambda progress_remaining: progress_remaining * start
 
-    return {
-        key: linear(linear_start(value)) if key in SCHEDULES and isinstance(value, str) else value
+    return {  # copies: an algorithm may fill in its kwargs (A2C adds RMSprop to policy_kwargs)
+        key: linear(linear_start(value))
+        if key in SCHEDULES and isinstance(value, str)
+        else copy.deepcopy(value)
         for key, value in config.hyperparams.items()
     }
 

@@ -2,6 +2,7 @@
 
     python -m agents.evaluate --model RUN_OR_ZIP --episodes 100 [--video game.mp4] [--curve]
     python -m agents.evaluate --policy heuristic --episodes 100
+    python -m agents.evaluate --model RUN_OR_ZIP --watch [--episodes 3]
 
 Each game is played to its end (the last ball drained, or the two-minute time limit), on seeds
 ``seed .. seed + episodes - 1`` (``--seed``, by default the config's ``eval_seed``, 100000). A
@@ -20,15 +21,18 @@ frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/P
   frames, with the random and heuristic baselines drawn in (from the run's report, or played
   on the same games, their results in ``OUT/random`` and ``OUT/heuristic``).
 
+``--watch`` plays the games in a window instead, at real speed (every frame shown at the
+table's frame rate), printing each score; close the window or press Ctrl-C to stop.
+
 ``report(run)`` (``python -m agents.train ... --report``) does all of it for a run and its two
-baselines and writes ``report.json``. An RLlib run or checkpoint folder (``agents.rllib``) plays
-the same games through its checkpoint's RL module and observation filter. Models are pickles:
-load only models you trust.
+baselines and writes ``report.json``. Models load through ``agents.policy.load_policy``: a run
+folder, a model or checkpoint zip (copied alone, it carries its config and statistics), or an
+RLlib run or checkpoint folder (``agents.rllib``), which plays the same games through its
+checkpoint's RL module and observation filter. Models are pickles: load only models you trust.
 """
 
 import argparse
 import csv
-import dataclasses
 import json
 import math
 from collections.abc import Callable
@@ -37,26 +41,16 @@ from typing import Any
 
 import numpy as np
 
-from agents import rllib
-from agents.common import (
-    BASELINES,
-    CONFIG_FILE,
-    MODEL_FILE,
-    Policy,
-    baseline_policy,
-    make_env,
-    stats_for,
-)
+from agents.common import BASELINES, Policy, baseline_policy, make_env
 from agents.config import (
     AnyConfig,
     ConfigError,
     TrainConfig,
-    algorithm_class,
     check_evaluation_seeds,
     config_from_dict,
-    load_config,
     load_run_config,
 )
+from agents.policy import ObsNormalization, load_policy
 
 # The baselines play frame by frame, on the model's table (or layouts) with the default rewards.
 BASELINE_KWARGS = ("table", "balls", "num_layouts", "start_layout", "difficulty")
@@ -126,24 +120,6 @@ def summarize(rows: list[dict]) -> dict[str, Any]:
     }
 
 
-def load_model(path: Path) -> tuple[Any, TrainConfig, Path]:
-    """A model, its config and its file, from a run folder or a model zip (the config is the
-    run's, beside the zip or one folder up). Trusted input only: SB3 zips hold pickles."""
-    if path.is_dir():
-        run, model_path = path, path / MODEL_FILE
-    else:
-        model_path = path
-        run = next((p for p in (path.parent, path.parent.parent) if (p / CONFIG_FILE).is_file()),
-                   path.parent)  # fmt: skip
-    if not model_path.is_file():
-        raise ConfigError(f"{path}: no model there ({model_path.name} not found)")
-    if not (run / CONFIG_FILE).is_file():
-        raise ConfigError(f"{path}: no {CONFIG_FILE} beside the model: cannot rebuild its env")
-    config = load_config(run / CONFIG_FILE)
-    model = algorithm_class(config.algo).load(model_path, device=config.device)
-    return model, config, model_path
-
-
 def evaluate(
     policy: str | None = None,
     model_path: Path | None = None,
@@ -154,10 +130,12 @@ def evaluate(
     video: Path | None = None,
     curve: bool = False,
     like: AnyConfig | None = None,
+    watch: bool = False,
 ) -> dict[str, Any]:
     """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
     returns the summary. A baseline plays on ``table``, or on the env (and layouts) of the
-    config ``like``."""
+    config ``like``. With ``watch``, the games are shown in a window instead (nothing is
+    written)."""
     if (policy is None) == (model_path is None):
         raise ConfigError("give a model or a policy (random or heuristic), not both")
     if episodes < 1:
@@ -179,29 +157,20 @@ def evaluate(
 
         name = str(model_path)
         out = out or (model_path if model_path.is_dir() else model_path.parent) / "eval"
-        if rllib.is_checkpoint(model_path):
-            checkpoint, config = rllib.load_checkpoint(model_path)
-            torch.set_num_threads(config.torch_threads)
-            act = rllib.checkpoint_policy(checkpoint, config)  # applies its own observation filter
-            config = dataclasses.replace(
-                config, env=dataclasses.replace(config.env, normalize=False)
-            )
-            stats = None
-        else:
-            model, config, path = load_model(model_path)
-            torch.set_num_threads(config.torch_threads)
-            stats, act = stats_for(path), model_policy(model)
-            if config.env.normalize and stats is None:
-                raise ConfigError(f"{model_path}: the model's VecNormalize statistics are missing")
+        trained = load_policy(model_path)
+        config, stats = trained.config, trained.normalization
+        torch.set_num_threads(config.torch_threads)
 
         def make_policy(venv: Any, seed: int) -> Policy:
-            return act
+            return lambda obs, infos: trained.act(obs)
 
     first = config.eval_seed if seed is None else seed
     if model_path is not None:
         check_evaluation_seeds(config, first, episodes)
+    if watch:
+        return watch_games(config, stats, make_policy, first, episodes)
     seeds = list(range(first, first + episodes))
-    venv = make_env(config, num_envs=episodes, seed=first, stats=stats)
+    venv = make_env(config, num_envs=episodes, seed=first, frozen=stats)
     rows = rollouts(venv, make_policy(venv, first), seeds)
     venv.close()
     summary = {"policy": name, "seeds": [first, first + episodes - 1], **summarize(rows)}
@@ -235,14 +204,14 @@ def write_results(out: Path, rows: list[dict], summary: dict[str, Any]) -> None:
 
 
 def record_video(
-    config: AnyConfig, stats: Path | None, make_policy: Callable[[Any, int], Policy], seed: int,
-    path: Path,
+    config: AnyConfig, stats: ObsNormalization | None,
+    make_policy: Callable[[Any, int], Policy], seed: int, path: Path,
 ) -> None:  # fmt: skip
     """The game on ``seed`` as a video (MP4, or GIF by the suffix), the scoreboard in view;
     ``make_policy(venv, seed)`` gives the player."""
     import imageio.v2 as imageio
 
-    venv = make_env(config, num_envs=1, seed=seed, stats=stats, render=True)
+    venv = make_env(config, num_envs=1, seed=seed, frozen=stats, render=True)
     act = make_policy(venv, seed)
     game = venv.get_attr("game")[0]
     fps = game.table.simulation.frame_rate  # every frame is recorded, those a step runs on too
@@ -271,6 +240,52 @@ def record_video(
                 break
     venv.close()
     print(f"video: {path} ({math.ceil(frames / stride)} frames)")
+
+
+def watch_games(
+    config: AnyConfig, stats: ObsNormalization | None,
+    make_policy: Callable[[Any, int], Policy], first: int, episodes: int,
+) -> dict[str, Any]:  # fmt: skip
+    """Play the games on seeds ``first..first + episodes - 1`` in a pygame window at real
+    speed: every frame, those a step runs on included, at the table's frame rate."""
+    from pinball_env.render import Window
+
+    venv = make_env(config, num_envs=1, seed=first, frozen=stats, render=True)
+    act = make_policy(venv, first)
+    game = venv.get_attr("game")[0]
+    window = None
+    closed = False
+
+    def show() -> None:  # after each frame's physics
+        nonlocal window, closed
+        frame = venv.get_images()[0]
+        if window is None:
+            window = Window((frame.shape[1], frame.shape[0]), game.table.simulation.frame_rate)
+        window.show(frame)
+        closed = closed or bool(window._pygame.event.peek(window._pygame.QUIT))
+
+    scores = []
+    game.on_frame = show
+    try:
+        for episode in range(episodes):
+            venv.seed(first + episode)
+            obs = venv.reset()
+            infos = list(venv.unwrapped.reset_infos)  # the wrappers keep none
+            done = False
+            while not (done or closed):
+                obs, _, dones, infos = venv.step(act(obs, infos))
+                done = bool(dones[0])
+            if closed:
+                break
+            scores.append(int(infos[0]["score"]))
+            print(f"game {episode + 1} (seed {first + episode}): score {scores[-1]}")
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if window is not None:
+            window.close()
+        venv.close()
+    return {"episodes": len(scores), "scores": scores}
 
 
 def baselines_for(run: Path) -> dict[str, float]:
@@ -354,12 +369,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--out", type=Path, help="where to write the results")
     parser.add_argument("--video", type=Path, help="record the first game (.mp4 or .gif)")
     parser.add_argument("--curve", action="store_true", help="draw a run's learning curve")
+    parser.add_argument("--watch", action="store_true", help="show the games in a window")
     args = parser.parse_args(argv)
     try:
         return evaluate(
             policy=args.policy, model_path=args.model, table=args.table, episodes=args.episodes,
-            seed=args.seed,
-            out=args.out, video=args.video, curve=args.curve,
+            seed=args.seed, out=args.out, video=args.video, curve=args.curve, watch=args.watch,
         )  # fmt: skip
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")

@@ -16,7 +16,9 @@ normalised by the baselines on the same games, heuristic = 1 and random = 0:
 ``(model - random) / (heuristic - random)`` over the mean scores of the set, so that each layout
 weighs as its games do (the ratio of single games would explode on a layout where the two
 baselines happen to score alike). Its 95% confidence interval is a bootstrap over the layouts,
-resampling the games of all three together. Written to ``--out`` (default
+resampling the games of all three together. Where the heuristic does not beat random on a set,
+there is no such scale: that set reports the raw scores, with a warning, and no normalised
+score (null in the JSON). Written to ``--out`` (default
 ``runs/generalization_TIME``): ``generalization.json``, ``generalization.csv`` and
 ``generalization.png`` (train and test score against the number of training layouts), and a
 run folder per N.
@@ -31,9 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from agents.common import BASELINES, baseline_policy, make_env, stats_for
-from agents.config import ConfigError, TrainConfig, algorithm_class, config_from_dict, load_config
-from agents.evaluate import baseline_config, model_policy, rollouts
+from agents.common import BASELINES, MODEL_FILE, baseline_policy, make_env
+from agents.config import ConfigError, TrainConfig, config_from_dict, load_config
+from agents.evaluate import baseline_config, rollouts
+from agents.policy import load_policy
 from agents.train import set_threads, start, train
 
 PROCGEN_ID = "PinballProcgen-v0"
@@ -55,17 +58,20 @@ def play(config: TrainConfig, who: str, layouts: list[int], run: Path | None = N
     baseline's name, or ``"model"`` (the run's)."""
     seeds = [config.eval_seed + i for i in range(len(layouts))]
     if who == "model":
-        model_path = run / "model.zip"
-        model = algorithm_class(config.algo).load(model_path, device=config.device)
-        venv = make_env(config, num_envs=len(layouts), seed=seeds[0], stats=stats_for(model_path))
-        act = model_policy(model)
+        trained = load_policy(run / MODEL_FILE)
+        venv = make_env(config, num_envs=len(layouts), seed=seeds[0], frozen=trained.normalization)
+
+        def act(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
+            return trained.act(obs)
+
     else:
         base = baseline_config(who, config)
         venv = make_env(base, num_envs=len(layouts), seed=seeds[0])
         act = baseline_policy(who, venv, seeds[0])
     rows = rollouts(venv, act, seeds, layouts)
     venv.close()
-    assert [row["layout"] for row in rows] == list(layouts)
+    if [row["layout"] for row in rows] != list(layouts):
+        raise RuntimeError(f"{who} played other layouts than the {len(layouts)} asked for")
     return np.array([row["score"] for row in rows], dtype=np.float64)
 
 
@@ -82,6 +88,26 @@ def normalised(model: np.ndarray, random: np.ndarray, heuristic: np.ndarray, see
     samples = np.array([ratio(rng.integers(0, n, n)) for _ in range(BOOTSTRAP_SAMPLES)])
     low, high = np.nanpercentile(samples, [2.5, 97.5])
     return ratio(np.arange(n)), [float(low), float(high)]
+
+
+def score_set(
+    model: np.ndarray, random: np.ndarray, heuristic: np.ndarray, name: str
+) -> dict[str, Any]:
+    """The mean scores of a set of games and the model's normalised score with its interval,
+    or, where the heuristic does not beat random (the scale's unit would be zero or
+    negative), none (``None``) and a warning: the raw scores are the result."""
+    result: dict[str, Any] = {
+        "normalised": None, "ci95": None, "model": float(model.mean()),
+        "random": float(random.mean()), "heuristic": float(heuristic.mean()),
+    }  # fmt: skip
+    if result["heuristic"] > result["random"]:
+        result["normalised"], result["ci95"] = normalised(model, random, heuristic)
+    else:
+        print(
+            f"warning: on the {name} layouts the heuristic ({result['heuristic']:.0f}) does not "
+            f"beat random ({result['random']:.0f}): no normalised score, raw scores only"
+        )
+    return result
 
 
 def benchmark(
@@ -111,31 +137,30 @@ def benchmark(
             "test": (test_config, test_layouts, test_baselines),
             "train": (trained, train_layouts, None),
         }
-        steps = algorithm_class(config.algo).load(run / "model.zip").num_timesteps
+        steps = load_policy(run / MODEL_FILE).model.num_timesteps
         row: dict[str, Any] = {
             "layouts": count, "run": run.name, "train_seconds": seconds, "train_steps": steps
         }  # fmt: skip
         for name, (env_config, layouts, baselines) in sets.items():
             scores = baselines or {who: play(env_config, who, layouts) for who in BASELINES}
             model = play(env_config, "model", layouts, run)
-            score, interval = normalised(model, scores["random"], scores["heuristic"])
-            row[name] = {
-                "normalised": score, "ci95": interval, "model": float(model.mean()),
-                "random": float(scores["random"].mean()),
-                "heuristic": float(scores["heuristic"].mean()),
-            }  # fmt: skip
+            row[name] = score_set(model, scores["random"], scores["heuristic"], name)
         results.append(row)
         print(
-            f"{count or 'unlimited'} layouts: test {row['test']['normalised']:.2f} "
-            f"{_interval(row['test']['ci95'])}, train {row['train']['normalised']:.2f} "
-            f"{_interval(row['train']['ci95'])} ({steps} steps, {seconds / 60:.1f} min)"
+            f"{count or 'unlimited'} layouts: test {_result(row['test'])}, "
+            f"train {_result(row['train'])} ({steps} steps, {seconds / 60:.1f} min)"
         )
         write(results, out, config, n_test)
     return results
 
 
-def _interval(interval: list[float]) -> str:
-    return f"({interval[0]:.2f} to {interval[1]:.2f})"
+def _result(result: dict[str, Any]) -> str:
+    """A set's normalised score and interval, or its raw scores when it has none."""
+    if result["normalised"] is None:
+        return (f"model {result['model']:.0f}, random {result['random']:.0f}, heuristic "
+                f"{result['heuristic']:.0f} (raw scores)")  # fmt: skip
+    low, high = result["ci95"]
+    return f"{result['normalised']:.2f} ({low:.2f} to {high:.2f})"
 
 
 def write(results: list[dict], out: Path, config: TrainConfig, n: int) -> None:
@@ -149,8 +174,9 @@ def write(results: list[dict], out: Path, config: TrainConfig, n: int) -> None:
         for row in results:
             for name in ("train", "test"):
                 r = row[name]
+                ci95 = r["ci95"] or ["", ""]  # none: the heuristic did not beat random
                 writer.writerow([row["layouts"] or "unlimited", name, r["normalised"],
-                                 *r["ci95"], r["model"], r["random"], r["heuristic"]])  # fmt: skip
+                                 *ci95, r["model"], r["random"], r["heuristic"]])  # fmt: skip
     plot(results, out / "generalization.png", config.total_timesteps)
 
 
@@ -165,8 +191,8 @@ def plot(results: list[dict], path: Path, steps: int) -> None:
     x = np.arange(len(results))
     fig, ax = plt.subplots(figsize=(6, 3.6), dpi=100)
     for offset, name, marker in ((-0.06, "train", "o"), (0.06, "test", "s")):
-        y = np.array([row[name]["normalised"] for row in results])
-        low, high = np.array([row[name]["ci95"] for row in results]).T
+        y = np.array([row[name]["normalised"] for row in results], dtype=float)  # None: NaN
+        low, high = np.array([row[name]["ci95"] or [None] * 2 for row in results], float).T
         ax.errorbar(x + offset, y, yerr=[y - low, high - y], marker=marker, capsize=4,
                     label=f"{name} layouts")  # fmt: skip
     ax.axhline(1.0, color="grey", linestyle="--", label="heuristic")

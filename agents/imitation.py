@@ -25,11 +25,11 @@ from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 BATCH_SIZE = 512
 
 
-def teacher_games(venv: Any, steps: int) -> dict[str, Any]:
+def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
     """The heuristic's play for ``steps`` steps of each env of ``venv`` (an SB3 VecEnv,
     possibly ``VecNormalize``, whose statistics learn from it): per step and env, the raw
     observation, the action, the raw reward and whether the game ended. Also ``frames``: the
-    frames played, summed over the envs."""
+    frames played, summed over the envs. Fewer steps (at least one) once ``stop`` is true."""
     n = venv.num_envs
     game = venv.get_attr("game")[0]
     players = [HeuristicPolicy(game.world.table_of(env)) for env in range(n)]
@@ -38,7 +38,9 @@ def teacher_games(venv: Any, steps: int) -> dict[str, Any]:
     obs = venv.reset()
     observations, actions, rewards, dones = [], [], [], []
     frames = FrameCounter(n)
-    for _ in range(steps):
+    for step in range(steps):
+        if step and stop:
+            break
         observations.append(raw() if raw else obs)
         action = np.array([
             player({"ball_position": balls[env, [BALL_X, BALL_Y]],
@@ -72,13 +74,16 @@ def discounted_returns(rewards: np.ndarray, dones: np.ndarray, gamma: float) -> 
     return returns
 
 
-def imitate(model: Any, venv: Any, steps: int, epochs: int, seed: int) -> dict[str, float]:
+def imitate(
+    model: Any, venv: Any, steps: int, epochs: int, seed: int, stop: Any = False
+) -> dict[str, float]:
     """Play ``steps`` env steps of the heuristic in ``venv`` and fit ``model``'s policy and value
-    to them (see the module's docstring); returns the fit's figures."""
+    to them (see the module's docstring); returns the fit's figures. Once ``stop`` (a
+    ``StopRequest``) is true, the games and the fit end early: the model keeps what it fitted."""
     import torch
 
     start = time.monotonic()
-    games = teacher_games(venv, max(1, steps // venv.num_envs))
+    games = teacher_games(venv, max(1, steps // venv.num_envs), stop)
     normalize = getattr(venv, "normalize_obs", None)
     obs = games["obs"].reshape(-1, *games["obs"].shape[2:])
     obs = normalize(obs) if normalize else obs
@@ -98,6 +103,8 @@ def imitate(model: Any, venv: Any, steps: int, epochs: int, seed: int) -> dict[s
     for _ in range(epochs):
         order = rng.permutation(len(actions))
         for first in range(0, len(order), BATCH_SIZE):
+            if stop:
+                break
             batch = torch.as_tensor(order[first : first + BATCH_SIZE], device=device)
             values, log_prob, _ = policy.evaluate_actions(obs_t[batch], actions_t[batch])
             value_loss = torch.nn.functional.mse_loss(values.flatten(), returns_t[batch])

@@ -36,8 +36,16 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.common import CHECKPOINTS, CONFIG_FILE, Policy, start_run
-from agents.config import ConfigError, RllibConfig, load_config
+from agents.common import (
+    CHECKPOINTS,
+    CONFIG_FILE,
+    ProgressBar,
+    StopRequest,
+    TrainingInterrupted,
+    extend_run,
+    start_run,
+)
+from agents.config import ConfigError, RllibConfig, load_config, save_config
 
 ENV_NAME = "pinball"  # the env's name in ray.tune's registry
 MODEL_DIR = "model"  # the final checkpoint in a run folder
@@ -170,12 +178,14 @@ def checkpoints_of(run: Path) -> list[tuple[int, Path]]:
     return sorted(found)
 
 
-def save_checkpoint(algo: Any, path: Path) -> None:
-    """Save the algorithm into the folder ``path``: written beside it, then renamed into place,
-    so a run killed mid-write never leaves half a checkpoint under the name."""
+def save_checkpoint(algo: Any, path: Path, config: RllibConfig) -> None:
+    """Save the algorithm into the folder ``path``, with the run's ``config.yaml`` (so that it
+    loads copied alone): written beside it, then renamed into place, so a run killed mid-write
+    never leaves half a checkpoint under the name."""
     temporary = path.with_name(f".{path.name}.tmp")
     shutil.rmtree(temporary, ignore_errors=True)
     algo.save_to_path(str(temporary.resolve()))
+    save_config(config, temporary / CONFIG_FILE)
     if path.exists():  # the final model, saved again on resume
         old = path.with_name(f".{path.name}.old")
         shutil.rmtree(old, ignore_errors=True)
@@ -265,8 +275,6 @@ def train(
 ) -> Path:  # fmt: skip
     """Train (or go on training) in ``run``; returns the final checkpoint's folder. Ray must be
     initialised (``init_ray``); ``local``: a Ray instance of this machine only."""
-    from tqdm import tqdm
-
     checkpoint = checkpoints_of(run)[-1] if resume and checkpoints_of(run) else None
     if resume and checkpoint is None:
         raise ConfigError(f"{run}: no checkpoint to resume from")
@@ -281,25 +289,29 @@ def train(
     every = config.checkpoint_every
     next_checkpoint = (steps // every + 1) * every if every else 0
     began = time.monotonic()
-    bar = tqdm(total=config.total_timesteps, initial=steps, unit="step", disable=not progress_bar)
+    bar = ProgressBar(config, steps, began + 60.0 * config.max_minutes, progress_bar)
     try:
-        while steps < config.total_timesteps:
-            result = algo.train()
-            row = progress_row(result, time.monotonic() - began)
-            bar.update(row["time/total_timesteps"] - steps)
-            steps = row["time/total_timesteps"]
-            if row["rollout/ep_score_mean"] != "":
-                bar.set_postfix(score=f"{row['rollout/ep_score_mean']:.0f}")
-            log.write(row)
-            if next_checkpoint and steps >= next_checkpoint:
-                save_checkpoint(algo, run / CHECKPOINTS / f"step_{steps}")
-                next_checkpoint = (steps // every + 1) * every
-            if config.max_minutes and time.monotonic() - began > 60.0 * config.max_minutes:
-                break
-        # The last checkpoint is the final model, so a resume goes on from it.
-        if not (run / CHECKPOINTS / f"step_{steps}").exists():
-            save_checkpoint(algo, run / CHECKPOINTS / f"step_{steps}")
-        save_checkpoint(algo, run / MODEL_DIR)
+        with StopRequest() as stop:  # a signal ends the iteration under way, then stops
+            while steps < config.total_timesteps and not stop:
+                result = algo.train()
+                row = progress_row(result, time.monotonic() - began)
+                steps = row["time/total_timesteps"]
+                bar.update(steps, force=True)
+                if row["rollout/ep_score_mean"] != "":
+                    bar.score(row["rollout/ep_score_mean"])
+                log.write(row)
+                if next_checkpoint and steps >= next_checkpoint:
+                    save_checkpoint(algo, run / CHECKPOINTS / f"step_{steps}", config)
+                    next_checkpoint = (steps // every + 1) * every
+                if config.max_minutes and time.monotonic() - began > 60.0 * config.max_minutes:
+                    break
+            # The last checkpoint is the final model, so a resume goes on from it.
+            last = run / CHECKPOINTS / f"step_{steps}"
+            if not last.exists():
+                save_checkpoint(algo, last, config)
+            if stop:
+                raise TrainingInterrupted(run, last, steps, stop, "agents.rllib")
+            save_checkpoint(algo, run / MODEL_DIR, config)
     finally:
         bar.close()
         log.close()
@@ -387,54 +399,13 @@ def is_checkpoint(path: Path) -> bool:
 def load_checkpoint(path: Path) -> tuple[Path, RllibConfig]:
     """The checkpoint folder and the run's config of an RLlib run folder or checkpoint."""
     checkpoint = path if (path / RLLIB_CHECKPOINT_FILE).is_file() else path / MODEL_DIR
-    run = next((p for p in (checkpoint.parent, checkpoint.parent.parent)
-                if (p / CONFIG_FILE).is_file()), None)  # fmt: skip
+    folders = (checkpoint, checkpoint.parent, checkpoint.parent.parent)  # its own config first
+    run = next((p for p in folders if (p / CONFIG_FILE).is_file()), None)
     if run is None:
-        raise ConfigError(f"{path}: no {CONFIG_FILE} in the run folder: cannot rebuild its env")
+        raise ConfigError(
+            f"{path}: no {CONFIG_FILE} in the checkpoint or its run folder: cannot rebuild its env"
+        )
     return checkpoint, load_config(run / CONFIG_FILE, kind=RllibConfig)
-
-
-def checkpoint_policy(checkpoint: Path, trained_config: RllibConfig) -> Policy:
-    """The greedy policy of an RLlib checkpoint over raw observations: its observation filter
-    (the running mean and std it trained with, frozen) and its RL module, in this process."""
-    import torch
-    from ray.rllib.core.columns import Columns
-    from ray.rllib.core.rl_module.rl_module import RLModule
-    from ray.rllib.utils.filter import RunningStat
-    from ray.rllib.utils.numpy import SMALL_NUMBER
-
-    module = RLModule.from_checkpoint(str(checkpoint.joinpath(*MODULE_PATH).resolve()))
-    module.eval()
-    normalise = None
-    filter_path = checkpoint.joinpath(*FILTER_PATH)
-    if filter_path.is_dir():
-        from ray.rllib.connectors.env_to_module import MeanStdFilter
-
-        trained = MeanStdFilter()  # as the env runners made it; then their spaces
-        trained.input_action_space = module.action_space
-        trained.input_observation_space = module.observation_space
-        trained.restore_from_path(str(filter_path.resolve()))
-        state = trained.get_state()[None]
-        stat = RunningStat.from_state(state["running_stats"][0])
-        mean, std, clip = stat.mean, stat.std, state["clip_by_value"]
-
-        def normalise(obs: np.ndarray) -> np.ndarray:  # RLlib's MeanStdFilter, not updated
-            scaled = obs - mean if state["de_mean_to_zero"] else obs
-            if state["de_std_to_one"]:
-                scaled = scaled / (std + SMALL_NUMBER)
-            return np.clip(scaled, -clip, clip) if clip else scaled
-
-    elif trained_config.env.normalize:
-        raise ConfigError(f"{checkpoint}: its observation filter (MeanStdFilter) is missing")
-
-    def act(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
-        if normalise is not None:
-            obs = normalise(obs)
-        with torch.no_grad():
-            out = module.forward_inference({Columns.OBS: torch.as_tensor(obs, dtype=torch.float32)})
-        return out[Columns.ACTION_DIST_INPUTS].argmax(dim=-1).numpy()
-
-    return act
 
 
 def main(argv: list[str] | None = None) -> Path | list[dict]:
@@ -455,14 +426,13 @@ def main(argv: list[str] | None = None) -> Path | list[dict]:
     args = parser.parse_args(argv)
     try:
         if args.resume is not None:
-            if args.config is not None or args.overrides or args.scaling:
-                raise ConfigError("--resume goes on with the run's own config: give nothing else")
-            if not (args.resume / CONFIG_FILE).is_file():
-                raise ConfigError(f"{args.resume}: not a run folder (no {CONFIG_FILE})")
+            if args.config is not None or args.scaling:
+                raise ConfigError("--resume goes on with the run's own config: no --config")
             run = args.resume
-            config = load_config(run / CONFIG_FILE, kind=RllibConfig)
-            if not checkpoints_of(run):
+            if (run / CONFIG_FILE).is_file() and not checkpoints_of(run):
                 raise ConfigError(f"{run}: no checkpoint to resume from")
+            command = sys.argv if argv is None else argv
+            config = extend_run(run, args.overrides, RllibConfig, command)
         elif args.config is None:
             raise ConfigError("give --config FILE (or --resume RUN)")
         else:
@@ -486,6 +456,8 @@ def main(argv: list[str] | None = None) -> Path | list[dict]:
             raise
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
+    except TrainingInterrupted as stopped:
+        parser.exit(stopped.exit_code, f"{stopped}\n")
     print(f"model: {model}")
     if args.report:
         from agents.evaluate import report

@@ -8,13 +8,17 @@ exact config (``config.yaml``), ``meta.json`` (package versions, command), Tenso
 (``events.out.tfevents.*``), ``progress.csv``, checkpoints written atomically every
 ``checkpoint_every`` env steps (``checkpoints/step_N.zip``), and the final ``model.zip`` (with
 ``model_vecnormalize.pkl`` when the config normalises). ``--resume RUN`` continues a run from
-its last checkpoint with the same config. Training stops at ``total_timesteps`` or after
-``max_minutes`` of wall time. With ``validate_every``, the model plays the validation games
-(``validate_seed`` on) every that many steps and at the end; the scores go to
-``validation.csv``, the best model so far to ``best_model.zip``, and the best of all becomes
-``model.zip`` (the last one stays in ``checkpoints/``). ``--report`` then evaluates the model
-against the random and heuristic baselines and writes the report into the run folder (see
-``agents.evaluate``).
+its last checkpoint with the same config; ``--resume RUN key=value ...`` extends it first
+(``total_timesteps``, ``max_minutes``, ``checkpoint_every`` and the validation keys: the
+others would change what was learned and are refused). Training stops at ``total_timesteps``
+or after ``max_minutes`` of wall time (the progress bar's remaining time counts to whichever
+comes first). SIGINT (Ctrl-C) or SIGTERM, warm start included, saves a checkpoint with the
+normalisation statistics and prints it and the resume command. With ``validate_every``, the
+model plays the validation games (``validate_seed`` on) every that many steps and at the end;
+the scores go to ``validation.csv``, the best model so far to ``best_model.zip``, and the best
+of all becomes ``model.zip`` (the last one stays in ``checkpoints/``). ``--report`` then
+evaluates the model against the random and heuristic baselines and writes the report into the
+run folder (see ``agents.evaluate``).
 
 Models are pickles inside zips: load only models you trust.
 """
@@ -34,11 +38,14 @@ import numpy as np
 
 from agents.common import (
     CHECKPOINTS,
-    CONFIG_FILE,
     MODEL_FILE,
     STATS_FILE,
     FrameCounter,
+    ProgressBar,
+    StopRequest,
+    TrainingInterrupted,
     atomic_write,
+    extend_run,
     latest_checkpoint,
     make_env,
     save_model,
@@ -109,7 +116,7 @@ class Validation:
             "truncated_share": summary["truncated_share"],
         }  # fmt: skip
         if best is None or row["score_mean"] > best["score_mean"]:
-            save_model(model, self.run, BEST_MODEL)
+            save_model(model, self.run, BEST_MODEL, self.config)
         self.rows.append(row)
         table = io.StringIO()
         writer = csv.DictWriter(table, fieldnames=self.FIELDS, lineterminator="\n")
@@ -134,13 +141,15 @@ def make_callback(
     frames: int = 0,
     started: float | None = None,
     validation: Validation | None = None,
+    stop: StopRequest | None = None,
+    progress_bar: bool = False,
 ) -> Any:
     """Checkpoints every ``checkpoint_every`` env steps, ``validation`` every
     ``validate_every`` (its score logged as ``validation/score_mean``), the mean game score of
     the last 100 training games logged as ``rollout/ep_score_mean`` (the score, not the shaped
-    return), the frames played by all envs as ``time/frames`` (counted on from ``frames``), and
-    the stop at ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning
-    starts)."""
+    return), the frames played by all envs as ``time/frames`` (counted on from ``frames``), the
+    stop at ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning
+    starts) or when ``stop`` is asked, and a progress bar (see :class:`ProgressBar`)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class TrainingCallback(BaseCallback):
@@ -156,6 +165,10 @@ def make_callback(
             self.next_checkpoint = self._next(config.checkpoint_every)
             self.next_validation = self._next(config.validate_every if validation else 0)
             self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
+            self.bar = ProgressBar(config, self.num_timesteps, self.deadline, progress_bar)
+
+        def _on_training_end(self) -> None:
+            self.bar.close()
 
         def _on_step(self) -> bool:
             dones, infos = self.locals["dones"], self.locals["infos"]
@@ -164,12 +177,15 @@ def make_callback(
                 self.scores.append(infos[env]["score"])
                 self.truncated.append(infos[env].get("TimeLimit.truncated", False))
             if self.next_checkpoint and self.num_timesteps >= self.next_checkpoint:
-                save_model(self.model, run / CHECKPOINTS, f"step_{self.num_timesteps}")
+                save_model(self.model, run / CHECKPOINTS, f"step_{self.num_timesteps}", config)
                 self.next_checkpoint += config.checkpoint_every
             if self.next_validation and self.num_timesteps >= self.next_validation:
                 row = validation(self.model, self.counter.frames)
                 self.logger.record("validation/score_mean", row["score_mean"])
                 self.next_validation += config.validate_every
+            self.bar.update(self.num_timesteps)
+            if stop:
+                return False
             return not config.max_minutes or time.monotonic() < self.deadline
 
         def _next(self, every: int) -> int:
@@ -181,6 +197,7 @@ def make_callback(
             if self.scores:
                 self.logger.record("rollout/ep_score_mean", float(np.mean(self.scores)))
                 self.logger.record("rollout/ep_truncated", float(np.mean(self.truncated)))
+                self.bar.score(float(np.mean(self.scores)))
 
     return TrainingCallback()
 
@@ -218,7 +235,15 @@ def start(config: TrainConfig, runs: Path, command: list[str]) -> Path:
 
 
 def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bool = True) -> Path:
-    """Train (or go on training) in ``run``; returns the final model's path."""
+    """Train (or go on training) in ``run``; returns the final model's path. SIGINT or SIGTERM
+    saves a checkpoint and raises :class:`TrainingInterrupted`."""
+    with StopRequest() as stop:
+        return _train(config, run, resume, progress_bar, stop)
+
+
+def _train(
+    config: TrainConfig, run: Path, resume: bool, progress_bar: bool, stop: StopRequest
+) -> Path:
     from stable_baselines3.common.logger import configure
 
     started = time.monotonic()
@@ -253,25 +278,33 @@ def train(config: TrainConfig, run: Path, resume: bool = False, progress_bar: bo
             raise ConfigError(f"hyperparams: {config.algo.upper()} rejects them: {error}") from None
     model.set_logger(configure(str(run), ["csv", "tensorboard"]))
     if config.imitation_steps and checkpoint is None:
-        fit = imitate(model, venv, config.imitation_steps, config.imitation_epochs, config.seed)
+        fit = imitate(
+            model, venv, config.imitation_steps, config.imitation_epochs, config.seed, stop
+        )  # fmt: skip
         print(
             f"warm start: the heuristic played {fit['steps']} steps ({fit['frames']} frames); "
             f"the policy now takes its action {fit['accuracy']:.1%} of the time "
-            f"({fit['seconds']:.0f} s)"
+            f"({fit['seconds']:.0f} s){' (cut short)' if stop else ''}"
         )
         for key in ("steps", "frames", "accuracy", "value_loss", "seconds"):
             model.logger.record(f"imitation/{key}", fit[key])
         frames = fit["frames"]
     validation = Validation(config, run) if config.validate_every else None
-    callback = make_callback(config, run, frames, started, validation)
+    callback = make_callback(config, run, frames, started, validation, stop, progress_bar)
     left = config.total_timesteps - model.num_timesteps
-    if left > 0:
-        model.learn(
-            left, callback=callback, reset_num_timesteps=not resume, progress_bar=progress_bar
-        )  # fmt: skip
+    if left > 0 and not stop:
+        model.learn(left, callback=callback, reset_num_timesteps=not resume)
     # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.
-    save_model(model, run / CHECKPOINTS, f"step_{model.num_timesteps}")
-    save_model(model, run, Path(MODEL_FILE).stem)
+    last = f"step_{model.num_timesteps}"
+    save_model(model, run / CHECKPOINTS, last, config)
+    if stop:  # asked to stop: the checkpoint is saved, the rest waits for the resume
+        if validation is not None:
+            validation.close()
+        venv.close()
+        raise TrainingInterrupted(
+            run, run / CHECKPOINTS / f"{last}.zip", model.num_timesteps, stop, "agents.train"
+        )
+    save_model(model, run, Path(MODEL_FILE).stem, config)
     if validation is not None:
         if not validation.rows or validation.rows[-1]["steps"] != model.num_timesteps:
             validation(model, callback.counter.frames)
@@ -296,7 +329,9 @@ def keep_best(run: Path, best: dict[str, Any]) -> None:
 def main(argv: list[str] | None = None) -> Path:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--config", type=Path, help="a YAML config (configs/agents/*.yaml)")
-    parser.add_argument("overrides", nargs="*", help="key=value settings over the config")
+    parser.add_argument(
+        "overrides", nargs="*", help="key=value settings over the config (--resume: extensions)"
+    )
     parser.add_argument("--resume", type=Path, metavar="RUN", help="a run folder to go on with")
     parser.add_argument("--runs", type=Path, default=Path("runs"), help="where run folders go")
     parser.add_argument("--report", action="store_true", help="evaluate and report at the end")
@@ -305,12 +340,12 @@ def main(argv: list[str] | None = None) -> Path:
     args = parser.parse_args(argv)
     try:
         if args.resume is not None:
-            if args.config is not None or args.overrides:
-                raise ConfigError("--resume goes on with the run's own config: give nothing else")
-            if not (args.resume / CONFIG_FILE).is_file():
-                raise ConfigError(f"{args.resume}: not a run folder (no {CONFIG_FILE})")
+            if args.config is not None:
+                raise ConfigError("--resume goes on with the run's own config: no --config")
             run = args.resume
-            config = load_config(run / CONFIG_FILE)
+            config = extend_run(
+                run, args.overrides, TrainConfig, sys.argv if argv is None else argv
+            )
         elif args.config is None:
             raise ConfigError("give --config FILE (or --resume RUN)")
         else:
@@ -328,6 +363,8 @@ def main(argv: list[str] | None = None) -> Path:
             raise
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
+    except TrainingInterrupted as stopped:
+        parser.exit(stopped.exit_code, f"{stopped}\n")
     print(f"model: {model}")
     if args.report:
         from agents.evaluate import report

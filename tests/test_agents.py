@@ -15,8 +15,10 @@ from agents import evaluate, train
 from agents.common import atomic_write, latest_checkpoint, make_env, save_model
 from agents.config import ConfigError, load_config, sb3_hyperparams
 from agents.imitation import discounted_returns, imitate, teacher_games
+from agents.policy import load_policy
 
 ROOT = Path(__file__).resolve().parent.parent
+CONFIGS_DIR = ROOT / "configs" / "agents"
 # The stable-baselines3 configs (rllib_*.yaml are RLlib's: tests/test_rllib.py).
 CONFIGS = sorted(p for p in (ROOT / "configs" / "agents").glob("*.yaml") if "rllib" not in p.name)
 # Tiny budgets: a few hundred steps, a couple of envs.
@@ -105,10 +107,25 @@ def test_evaluation_refuses_training_seeds_and_missing_statistics(tmp_path, caps
     with pytest.raises(SystemExit):
         evaluate.main(["--model", str(run), "--episodes", "2", "--seed", "1"])
     assert "seeds 1..2 overlap the training seeds 0..1" in capsys.readouterr().err
+    # A zip saved before models carried their statistics, without the pickle beside it:
+    strip_agent_entry(run / "model.zip")
     (run / "model_vecnormalize.pkl").unlink()
     with pytest.raises(SystemExit):
         evaluate.main(["--model", str(run), "--episodes", "1"])
     assert "VecNormalize statistics are missing" in capsys.readouterr().err
+
+
+def strip_agent_entry(model: Path) -> None:
+    """Rewrite a model zip without the config and statistics it carries (an older zip)."""
+    import zipfile
+
+    from agents.common import AGENT_ENTRY
+
+    with zipfile.ZipFile(model) as archive:
+        entries = {name: archive.read(name) for name in archive.namelist() if name != AGENT_ENTRY}
+    with zipfile.ZipFile(model, "w") as archive:
+        for name, data in entries.items():
+            archive.writestr(name, data)
 
 
 def test_a_checkpoint_write_killed_midway_leaves_the_last_one_whole(tmp_path):
@@ -134,12 +151,12 @@ def test_save_model_writes_the_normalisation_statistics_first(tmp_path, monkeypa
 
     class Model:
         def get_env(self):
-            return type("VecNormalize", (), {"obs_rms": None})()
+            return type("VecNormalize", (), {"obs_rms": None, "norm_obs": False})()
 
         def save(self, file):
             pass
 
-    save_model(Model(), tmp_path, "step_5")
+    save_model(Model(), tmp_path, "step_5", load_config(ROOT / "configs/agents/ppo.yaml"))
     assert order == ["step_5_vecnormalize.pkl", "step_5.zip"]
 
 
@@ -266,7 +283,7 @@ def test_the_command_line_fails_clearly_before_training(tmp_path, capsys):
     assert not runs.exists() or not any(runs.iterdir())  # no run folder left behind
     with pytest.raises(SystemExit):
         evaluate.main(["--model", str(tmp_path / "nothing")])
-    assert "no model there" in capsys.readouterr().err
+    assert "nothing: no such file or folder" in capsys.readouterr().err
 
 
 def test_rl_zoo3_hyperparameters_are_the_ppo_config():
@@ -330,11 +347,11 @@ def test_validation_keeps_the_best_model_and_goes_on_after_a_resume(tmp_path, ca
     assert PPO.load(run / "model.zip").num_timesteps == int(best["steps"])
     assert f"at {best['steps']} steps" in capsys.readouterr().out
     # The model replays its validation games through its saved chain, to the same scores.
-    model, config, path = evaluate.load_model(run)
-    venv = make_env(
-        config, num_envs=3, seed=300_000, stats=path.with_name("model_vecnormalize.pkl")
+    trained = load_policy(run)
+    venv = make_env(trained.config, num_envs=3, seed=300_000, frozen=trained.normalization)
+    replayed = evaluate.rollouts(
+        venv, evaluate.model_policy(trained.model), [300_000, 300_001, 300_002]
     )
-    replayed = evaluate.rollouts(venv, evaluate.model_policy(model), [300_000, 300_001, 300_002])
     assert np.mean([row["score"] for row in replayed]) == pytest.approx(
         float(best["score_mean"]), abs=0.01
     )
@@ -401,3 +418,111 @@ def test_the_warm_start_fits_the_heuristic_and_counts_in_the_budget(tmp_path):
         row = next(csv.DictReader(file))
     assert float(row["imitation/steps"]) == 512 and float(row["imitation/accuracy"]) > 0.5
     assert int(float(row["time/frames"])) > int(float(row["imitation/frames"]))
+
+
+def start_training(
+    runs: Path,
+    *overrides: str,
+    module: str = "agents.train",
+    config: Path = CONFIGS_DIR / "ppo.yaml",
+) -> subprocess.Popen:
+    """``python -m MODULE --config CONFIG`` with a budget it will not reach, in a process of its
+    own (stdout and stderr piped)."""
+    command = [sys.executable, "-m", module, "--config", str(config), *overrides,
+               "--runs", str(runs), "--no-progress"]  # fmt: skip
+    return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+
+
+def wait_for(condition, process: subprocess.Popen, seconds: float = 240.0) -> None:
+    import time
+
+    deadline = time.monotonic() + seconds
+    while not condition():
+        if process.poll() is not None:
+            raise AssertionError(f"training ended early: {process.communicate()}")
+        if time.monotonic() > deadline:
+            process.kill()
+            raise AssertionError("timed out waiting for the training")
+        time.sleep(0.2)
+
+
+def logged_rows(runs: Path) -> int:
+    files = list(runs.glob("*/progress.csv"))
+    return len(files[0].read_text().splitlines()) if files else -1
+
+
+@pytest.mark.parametrize(("signal_name", "warm_start"), [("SIGINT", False), ("SIGTERM", True)])
+def test_a_signal_saves_a_checkpoint_and_the_run_resumes_extended(
+    tmp_path, signal_name, warm_start
+):
+    import signal
+    import zipfile
+
+    from stable_baselines3 import PPO
+
+    from agents.common import AGENT_ENTRY
+
+    runs = tmp_path / "runs"
+    budget = ["total_timesteps=100000000", "checkpoint_every=0", *TINY["ppo"], "env.num_envs=2"]
+    warm = ["imitation_steps=100000000"] if warm_start else ["imitation_steps=0"]
+    process = start_training(runs, *budget, *warm)
+    # Learning has begun once a row is logged; the warm start, once the log file exists.
+    wait_for(lambda: logged_rows(runs) >= (0 if warm_start else 2), process)
+    process.send_signal(getattr(signal, signal_name))
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 128 + getattr(signal, signal_name), err
+    (run,) = runs.iterdir()
+    steps, checkpoint = latest_checkpoint(run)
+    assert steps == 0 if warm_start else steps >= 128
+    assert f"checkpoint {checkpoint}" in err
+    assert f"resume with: python -m agents.train --resume {run}" in err
+    assert checkpoint.with_name(f"step_{steps}_vecnormalize.pkl").is_file()
+    with zipfile.ZipFile(checkpoint) as archive:
+        assert json.loads(archive.read(AGENT_ENTRY))["obs_normalization"]["var"]
+    assert "Traceback" not in err
+    # The resume extends the run: a new budget, the same learning.
+    train.main(["--resume", str(run), f"total_timesteps={steps + 256}", "--no-progress"])
+    assert PPO.load(run / "model.zip").num_timesteps >= steps + 256
+    assert load_config(run / "config.yaml").total_timesteps == steps + 256
+    meta = json.loads((run / "meta.json").read_text())
+    assert meta["resumes"][0]["overrides"] == [f"total_timesteps={steps + 256}"]
+
+
+def test_a_resume_refuses_keys_that_would_change_what_was_learned(tmp_path, capsys):
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")
+    before = (run / "config.yaml").read_text()
+    for key in ("hyperparams.learning_rate=0.1", "env.kwargs.frame_skip=2", "seed=3"):
+        with pytest.raises(SystemExit) as exit_:
+            train.main(["--resume", str(run), key, "--no-progress"])
+        assert exit_.value.code == 2
+        name = key.partition("=")[0]
+        assert f"--resume: {name!r} would change what the run learned" in capsys.readouterr().err
+    assert (run / "config.yaml").read_text() == before
+    with pytest.raises(SystemExit):
+        train.main(["--resume", str(run), "max_minutes=-1", "--no-progress"])
+    assert "max_minutes" in capsys.readouterr().err
+    assert (run / "config.yaml").read_text() == before
+
+
+def test_the_progress_bar_counts_down_to_max_minutes(monkeypatch):
+    from agents.common import ProgressBar
+
+    clock = [1000.0]
+    monkeypatch.setattr("agents.common.time.monotonic", lambda: clock[0])
+    config = load_config(ROOT / "configs/agents/ppo.yaml", ["max_minutes=1"])
+    bar = ProgressBar(config, 0, deadline=1060.0, show=True)
+    clock[0] = 1010.0
+    bar.update(1000)  # 100 steps/s with 50 s left: the run will end at 6000 steps
+    assert bar.bar.total == 6000 and bar.bar.desc.startswith("stops at max_minutes")
+    clock[0] = 1020.0
+    bar.update(2000)
+    assert bar.bar.total == 6000
+    unlimited = ProgressBar(
+        load_config(ROOT / "configs/agents/ppo.yaml", ["max_minutes=0"]), 0, 0.0, True
+    )
+    clock[0] = 1030.0
+    unlimited.update(1000)
+    assert unlimited.bar.total == config.total_timesteps
+    bar.close()
+    unlimited.close()

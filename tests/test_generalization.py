@@ -66,3 +66,15 @@ def test_the_benchmark_needs_the_procgen_env(tmp_path, capsys):
     assert "PinballProcgen-v0" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         generalization.main(["--config", str(CONFIG), "--layouts", "-1"])
+
+
+def test_no_normalised_score_where_the_heuristic_does_not_beat_random(capsys):
+    from agents.generalization import score_set
+
+    random = np.array([5000.0, 4000.0])
+    below = score_set(np.array([100.0, 300.0]), random, random - 500.0, "test")
+    assert below["normalised"] is None and below["ci95"] is None
+    assert (below["model"], below["random"], below["heuristic"]) == (200.0, 4500.0, 4000.0)
+    assert "does not beat random" in capsys.readouterr().out
+    above = score_set(random + 1000.0, random, random + 1000.0, "test")
+    assert above["normalised"] == 1.0

@@ -15,6 +15,9 @@ import ray
 
 from agents import evaluate, rllib
 from agents.config import ConfigError, RllibConfig, load_config
+from agents.policy import load_policy
+from tests.test_agents import start_training, wait_for
+from tests.test_policy import readme_example
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "agents" / "rllib_ppo.yaml"
@@ -99,12 +102,13 @@ def test_train_resume_and_evaluate_from_the_command_line(tmp_path, no_ray):
     )
 
     # Resumed with a bigger budget: the step count goes on from the last checkpoint.
-    config = (run / "config.yaml").read_text()
-    (run / "config.yaml").write_text(config.replace("total_timesteps: 500", "total_timesteps: 900"))
     with open(run / "progress.csv", "a") as file:  # as if logged after the last checkpoint
         file.write(f"{10**9}" + ",0" * 13 + "\n")
     ray.shutdown()
-    rllib.main(["--resume", str(run), "--no-progress"])
+    with pytest.raises(SystemExit):  # what was learned stays as it was
+        rllib.main(["--resume", str(run), "hyperparams.lr=0.1", "--no-progress"])
+    rllib.main(["--resume", str(run), "total_timesteps=900", "--no-progress"])
+    assert load_config(run / "config.yaml", kind=RllibConfig).total_timesteps == 900
     with open(run / "progress.csv") as file:
         steps = [int(row["time/total_timesteps"]) for row in csv.DictReader(file)]
     assert steps == sorted(set(steps)) and steps[-1] >= 900  # counted on, not from zero
@@ -119,6 +123,10 @@ def test_train_resume_and_evaluate_from_the_command_line(tmp_path, no_ray):
     assert (tmp_path / "e0" / "episodes.csv").read_text() == (
         tmp_path / "e1" / "episodes.csv"
     ).read_text()
+    # The README's example plays the same games through load_policy.
+    with open(tmp_path / "e0" / "episodes.csv") as file:
+        expected = [int(row["score"]) for row in csv.DictReader(file)]
+    assert [readme_example(run, 100_000 + game) for game in range(2)] == expected
     checkpoint = run / "checkpoints" / f"step_{first[0]}"
     video = tmp_path / "game.gif"
     summary = evaluate.main(["--model", str(checkpoint), "--episodes", "1", "--video", str(video)])
@@ -137,7 +145,8 @@ def test_the_policy_sees_observations_as_training_normalised_them(tmp_path, no_r
     rllib.main(["--config", str(CONFIG), *TINY, "env_runners=0", "total_timesteps=200",
                 "--runs", str(runs), "--no-progress"])  # fmt: skip
     (run,) = runs.iterdir()
-    checkpoint, trained = rllib.load_checkpoint(run)
+    checkpoint, _ = rllib.load_checkpoint(run)
+    assert (checkpoint / "config.yaml").is_file()  # a checkpoint copied alone loads
     seen = []
     load = RLModule.from_checkpoint
 
@@ -149,7 +158,8 @@ def test_the_policy_sees_observations_as_training_normalised_them(tmp_path, no_r
 
     monkeypatch.setattr(RLModule, "from_checkpoint", spied)
     obs = np.random.default_rng(0).normal(size=(3, 10)).astype(np.float32)
-    actions = rllib.checkpoint_policy(checkpoint, trained)(obs, [{}] * 3)
+    policy = load_policy(run)
+    actions = policy.act(policy.normalization(obs))
     assert actions.shape == (3,) and set(actions) <= {0, 1, 2, 3}
     state_file = checkpoint.joinpath(*rllib.FILTER_PATH) / "state.pkl"
     state = pickle.loads(state_file.read_bytes())[None]
@@ -184,12 +194,13 @@ def test_a_checkpoint_write_killed_midway_leaves_no_checkpoint(tmp_path):
 
     folder = tmp_path / "checkpoints"
     folder.mkdir()
-    rllib.save_checkpoint(Whole(), folder / "step_100")
+    config = RllibConfig()
+    rllib.save_checkpoint(Whole(), folder / "step_100", config)
     with pytest.raises(KeyboardInterrupt):
-        rllib.save_checkpoint(Dying(), folder / "step_200")
+        rllib.save_checkpoint(Dying(), folder / "step_200", config)
     assert [steps for steps, _ in rllib.checkpoints_of(tmp_path)] == [100]
     assert not (folder / "step_200").exists()
-    rllib.save_checkpoint(Whole(), folder / "step_100")  # saved again over itself: still whole
+    rllib.save_checkpoint(Whole(), folder / "step_100", config)  # again over itself: whole
     assert [path.name for path in folder.iterdir() if not path.name.startswith(".")] == ["step_100"]
 
 
@@ -255,3 +266,20 @@ def test_scaling_measures_each_runner_count(tmp_path, no_ray):
     assert all(row["steps"] >= 256 and row["sampled_steps_per_s"] > 0 for row in rows)
     saved = json.loads((tmp_path / "scaling.json").read_text())
     assert saved["rows"] == rows
+
+
+def test_a_signal_saves_a_checkpoint_and_says_how_to_resume(tmp_path):
+    import signal
+
+    runs = tmp_path / "runs"
+    budget = ["env_runners=0", "total_timesteps=100000000", "checkpoint_every=0"]
+    process = start_training(runs, *TINY, *budget, module="agents.rllib", config=CONFIG)
+    wait_for(lambda: any(runs.glob("*/progress.csv")), process)  # an iteration is done
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=180)
+    assert process.returncode == 128 + signal.SIGINT, err
+    (run,) = runs.iterdir()
+    steps, checkpoint = rllib.checkpoints_of(run)[-1]
+    assert steps > 0 and (checkpoint / "config.yaml").is_file()
+    assert f"resume with: python -m agents.rllib --resume {run}" in err
+    assert "Traceback" not in err
