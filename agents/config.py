@@ -26,6 +26,7 @@ import yaml
 
 from pinball_env import MAX_EPISODE_STEPS
 from pinball_env.env import PinballEnv
+from pinball_env.extras import missing_message
 from pinball_env.procgen_env import PinballProcgenEnv
 
 ALGORITHMS = ("ppo", "a2c", "dqn")
@@ -410,7 +411,7 @@ def _check_rllib(config: RllibConfig, fail: Callable[[str, str], None]) -> None:
         from ray.rllib.algorithms.ppo import PPOConfig
         from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
     except ImportError:
-        fail("algo", "Ray RLlib is not installed: pip install -e '.[distributed]'")
+        fail("algo", f"Ray RLlib: {missing_message('ray')}")
     taken = set(inspect.signature(PPOConfig.training).parameters)
     taken |= set(inspect.signature(AlgorithmConfig.training).parameters)
     _check_options("hyperparams", config.hyperparams, taken - RLLIB_NOT_HYPERPARAMS, "PPO", fail)

@@ -22,7 +22,7 @@ from pinball_env.backends import make_world
 from pinball_env.physics import State, first_flipper
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.step import step_ball
-from pinball_env.table import BUTTONS, Table, check_ball_state
+from pinball_env.table import BUTTONS, TEST_TABLES, Table, check_ball_state
 from pinball_env.world import compiled_entry
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
@@ -648,15 +648,21 @@ def _state_observation(balls, flipper_angle, flipper_omega, active, balls_left, 
 
 
 def check_playable(table: Table) -> None:
-    """A game needs a plunger to launch, flippers to play, an outline and a drain to end it."""
-    if table.plunger is None:
-        raise ValueError(f"table {table.name!r} has no plunger: a game needs one to launch")
-    if not table.flippers:
-        raise ValueError(f"table {table.name!r} has no flippers: there is nothing to play")
-    if table.outline is None:
-        raise ValueError(f"table {table.name!r} has no closed outline wall to keep the ball in")
-    if not any(sensor.drain for sensor in table.sensors):
-        raise ValueError(f"table {table.name!r} has no drain sensor: a game could never end")
+    """A game needs a plunger to launch, flippers to play, an outline and a drain to end it: a
+    ValueError names everything the table lacks."""
+    lacks = [
+        what
+        for what, missing in (
+            ("no plunger to launch the ball", table.plunger is None),
+            ("no flippers to play", not table.flippers),
+            ("no closed outline wall to keep the ball in", table.outline is None),
+            ("no drain sensor to end a game", not any(s.drain for s in table.sensors)),
+        )
+        if missing
+    ]
+    if lacks:
+        rig = " (it is a physics test rig)" if table.name in TEST_TABLES else ""
+        raise ValueError(f"table {table.name!r} cannot be played{rig}: it has {', '.join(lacks)}")
     if not table.drain_reachable:
         raise ValueError(
             f"table {table.name!r}: no drain can be reached from the plunger, a game could "

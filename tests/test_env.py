@@ -310,7 +310,11 @@ def without_drain():
         ({"render_mode": "ansi"}, ValueError, "render_mode must be one of"),
         ({"balls": 0}, ValueError, "balls must be"),
         ({"reward_scale": float("nan")}, ValueError, "reward_scale must be a finite"),
-        ({"table": "box"}, ValueError, "has no plunger"),
+        (
+            {"table": "box"},
+            ValueError,
+            "'box' cannot be played \\(it is a physics test rig\\): it has no plunger",
+        ),
         ({"physics": "box2d"}, ValueError, "physics must be one of"),
         ({"table": without_drain()}, ValueError, "no drain sensor"),
     ],

@@ -74,7 +74,8 @@ def test_box_loads() -> None:
 
 def test_load_by_name() -> None:
     assert load_table("box") == load_table(BOX)
-    assert "box" in available_tables()
+    assert available_tables() == ["classic"] and available_tables("test") == ["box"]
+    assert available_tables("all") == ["box", "classic"]
 
 
 def test_packed_arrays() -> None:
@@ -868,7 +869,9 @@ def test_from_dict_names_dict_source() -> None:
 
 
 def test_unknown_name_lists_available_tables() -> None:
-    with pytest.raises(TableError, match=r"unknown table 'no_such_table' \(available: .*box"):
+    with pytest.raises(
+        TableError, match=r"unknown table 'no_such_table' \(available: classic; test rigs: box\)"
+    ):
         load_table("no_such_table")
 
 
@@ -910,5 +913,7 @@ def test_built_in_tables_live_in_the_package() -> None:
     folder = builtin_tables_dir()
     assert folder.parent.name == "table" and folder.parent.parent.name == "pinball_env"
     assert sorted(p.name for p in folder.glob("*.yaml")) == ["box.yaml", "classic.yaml"]
-    with pytest.raises(TableError, match=r"unknown table 'nope' \(available: box, classic\)"):
+    with pytest.raises(
+        TableError, match=r"unknown table 'nope' \(available: classic; test rigs: box\)"
+    ):
         load_table("nope")

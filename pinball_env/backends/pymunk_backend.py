@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from pinball_env.extras import require
 from pinball_env.physics import capsule_face_normal, first_circle, first_flipper
 from pinball_env.physics.columns import (
     BALL_SPIN,
@@ -54,10 +55,7 @@ from pinball_env.physics.step import (
 from pinball_env.table import Table
 from pinball_env.world import World
 
-try:
-    import pymunk
-except ImportError as error:  # pragma: no cover - depends on the install
-    raise ImportError('the pymunk backend needs pymunk: pip install -e ".[crosscheck]"') from error
+pymunk = require("pymunk")
 
 # Chipmunk's defaults assume pixels; in metres they would let the ball sink 10 cm into a wall.
 COLLISION_SLOP = 1e-4  # [m] overlap allowed before the position correction acts

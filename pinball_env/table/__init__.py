@@ -9,6 +9,7 @@
 
 from pinball_env.table.files import (
     TABLES_DIR,
+    TEST_TABLES,
     available_tables,
     builtin_tables_dir,
     dump_table,
@@ -39,6 +40,7 @@ __all__ = [
     "BUTTONS",
     "MAX_BALL_SPEED",
     "TABLES_DIR",
+    "TEST_TABLES",
     "Ball",
     "Flipper",
     "Material",

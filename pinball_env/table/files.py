@@ -47,12 +47,24 @@ class _StrictLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-def available_tables() -> list[str]:
-    """Names of the built-in tables."""
+# Built-in tables that are physics test rigs, not games: they load, but have no plunger,
+# flippers or drain, so no env plays them.
+TEST_TABLES = ("box",)
+TABLE_KINDS = ("game", "test", "all")
+
+
+def available_tables(kind: str = "game") -> list[str]:
+    """Names of the built-in tables: those a game is played on (``"game"``, the default), the
+    physics test rigs (``"test"``: :data:`TEST_TABLES`), or ``"all"``."""
+    if kind not in TABLE_KINDS:
+        raise ValueError(f"kind must be one of {', '.join(TABLE_KINDS)}, got {kind!r}")
     folder = builtin_tables_dir()
-    if not folder.is_dir():
-        return []
-    return sorted(p.stem for p in folder.iterdir() if p.suffix in SUFFIXES)
+    names = (
+        sorted(p.stem for p in folder.iterdir() if p.suffix in SUFFIXES) if folder.is_dir() else []
+    )
+    if kind == "all":
+        return names
+    return [name for name in names if (name in TEST_TABLES) == (kind == "test")]
 
 
 def load_table(name_or_path: str | os.PathLike[str]) -> Table:
@@ -68,7 +80,10 @@ def load_table(name_or_path: str | os.PathLike[str]) -> Table:
             path = next((p for p in candidates if p.is_file()), None)
             if path is None:
                 available = ", ".join(available_tables()) or "none"
-                raise TableError(f"unknown table {shown!r} (available: {available})")
+                rigs = ", ".join(available_tables("test"))
+                raise TableError(
+                    f"unknown table {shown!r} (available: {available}; test rigs: {rigs})"
+                )
         found = path.is_file()
     except OSError as exc:  # a name too long for the file system, say
         raise TableError(f"{shown}: cannot read the file: {_shorten(str(exc), 120)}") from None

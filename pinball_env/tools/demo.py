@@ -1,8 +1,9 @@
 """Watch the scripted heuristic play: ``python -m pinball_env.tools.demo``.
 
-Opens a pygame window (``pip install -e ".[render]"``) and plays games of ``Pinball-v0`` with
+Opens a pygame window (the ``render`` extra) and plays games of ``Pinball-v0`` with
 :class:`~pinball_env.heuristic.HeuristicPolicy`, printing each game's score. Without a display
-(or with ``--headless``) it plays off-screen and saves the last frame as a PNG.
+(or with ``--headless``) it plays off-screen and saves the last frame as a PNG (matplotlib, the
+``plot`` extra). What it needs is checked before a game is played.
 """
 
 import argparse
@@ -14,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from pinball_env import MAX_EPISODE_STEPS  # importing the package registers Pinball-v0
+from pinball_env.extras import MissingDependency, require
 from pinball_env.heuristic import HeuristicPolicy
 
 
@@ -28,6 +30,7 @@ def has_display() -> bool:
 
 def save_png(frame: np.ndarray, path: Path) -> None:
     """Write an (H, W, 3) uint8 frame to PNG (needs matplotlib, the ``plot`` extra)."""
+    require("matplotlib").use("Agg")
     import matplotlib.pyplot as plt
 
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -82,6 +85,10 @@ def main(argv: list[str] | None = None) -> list[int]:
     headless = args.headless or not has_display()
     if headless and not args.headless:
         print("no display found: playing headless")
+    try:  # before a game is played, not after it
+        require("matplotlib" if headless else "pygame")
+    except MissingDependency as error:
+        parser.exit(1, f"error: {error}\n")
     return play(args.table, args.episodes, args.seed, args.max_steps, headless, args.snapshot)
 
 

@@ -7,7 +7,7 @@ Examples::
     python -m pinball_env.tools.plot procgen:7 --out outputs/procgen7.png
     python -m pinball_env.tools.plot --gallery --difficulty hard --seeds 0 12 --out gallery.png
 
-Needs matplotlib (``pip install -e ".[plot]"``).
+Needs matplotlib (the ``plot`` extra).
 """
 
 import argparse
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pinball_env.extras import require
 from pinball_env.physics import capsule_face_normal
 from pinball_env.procgen import DIFFICULTIES, generate_table, load_any_table
 from pinball_env.table import Flipper, Table
@@ -48,13 +49,10 @@ def flipper_outline(flipper: Flipper, angle_deg: float, arc_points: int = 12) ->
 
 
 def _pyplot():
-    try:
-        import matplotlib
+    matplotlib = require("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError as error:  # pragma: no cover - depends on the install
-        raise ImportError('drawing tables needs matplotlib: pip install -e ".[plot]"') from error
     return plt
 
 

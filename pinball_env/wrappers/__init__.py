@@ -1,7 +1,7 @@
 """Wrappers users need around the envs.
 
 - ``SB3VecEnv``: a stable-baselines3 ``VecEnv`` over the native vector env. stable-baselines3 is
-  imported only when it is used (``pip install -e ".[train]"``).
+  imported only when it is used (the ``train`` extra).
 """
 
 from typing import Any
