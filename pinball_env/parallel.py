@@ -4,9 +4,14 @@ The kernels release the GIL (``nogil=True``) and every env reads and writes only
 the results are bitwise those of one call over all envs, for any thread count. (Numba's own
 ``prange`` was tried first: compiled with ``parallel=True`` the world step gave different
 trajectories than the serial kernel, even on one thread.)
+
+Fork-safe: a process forked from one that has started the threads has none of them (a fork copies
+only the forking thread), so the copy of the executor would take work and never do it; the child
+starts its own instead.
 """
 
 import itertools
+import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -28,11 +33,13 @@ def check_threads(num_threads: object) -> int:
 
 class EnvThreads:
     """Runs ``kernel(*args, start, stop)`` over ``[0, n_envs)`` in at most ``num_threads``
-    contiguous ranges, this thread taking the first. Picklable: a copy starts its own threads."""
+    contiguous ranges, this thread taking the first. Picklable, and fork-safe: a copy, or a
+    forked child, starts its own threads."""
 
     def __init__(self, num_threads: int = 1) -> None:
         self.num_threads = check_threads(num_threads)
         self._pool: ThreadPoolExecutor | None = None
+        self._pid = os.getpid()  # the process whose threads _pool has
 
     def run(self, kernel: Callable[..., Any], n_envs: int, *args: Any) -> list[Any]:
         """The kernel's results, one per range, in env order."""
@@ -43,17 +50,18 @@ class EnvThreads:
         ranges = [(int(a), int(b)) for a, b in itertools.pairwise(bounds)]
         if len(ranges) == 1:
             return [kernel(*args, *ranges[0])]
-        if self._pool is None:
+        if self._pool is None or self._pid != os.getpid():
             self._pool = ThreadPoolExecutor(self.num_threads - 1, thread_name_prefix="pinball")
+            self._pid = os.getpid()
         futures = [self._pool.submit(kernel, *args, start, stop) for start, stop in ranges[1:]]
         first = kernel(*args, *ranges[0])
         return [first, *(future.result() for future in futures)]
 
     def close(self) -> None:
         """Stop the threads (a later run starts new ones)."""
-        if self._pool is not None:
+        if self._pool is not None and self._pid == os.getpid():
             self._pool.shutdown()
-            self._pool = None
+        self._pool = None  # a parent's executor, in a forked child: nothing of it runs here
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"num_threads": self.num_threads, "_pool": None}
+        return {"num_threads": self.num_threads, "_pool": None, "_pid": os.getpid()}

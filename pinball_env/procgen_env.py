@@ -4,12 +4,18 @@ The single env (:class:`PinballProcgenEnv`) and the native vector env
 (:class:`PinballProcgenVectorEnv`, each env on its own table, all stepped in one kernel call) are
 the Pinball-v0 envs with a layout drawn at every reset and observations that keep their meaning
 from one table to the next.
+
+Tables are made by the env (its :class:`Layouts`): the table of each env's next game generated in
+the background while this one is played, those a reset needs at once on several threads.
 """
 
 import functools
 import math
-from collections.abc import Mapping, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
+import os
+import sys
+import time
+from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from typing import Any
 
 import numpy as np
@@ -27,15 +33,21 @@ from pinball_env.physics.columns import (
     FLIPPER_PIVOT_Y,
     FLIPPER_TIP_RADIUS,
 )
-from pinball_env.procgen import DIFFICULTIES, MAX_SEED, generate_table
-from pinball_env.render import Renderer, render_size
+from pinball_env.procgen import DIFFICULTIES, MAX_SEED, RANGES, generate_table
+from pinball_env.render import PIXELS_PER_METRE, FrameRenderer, Renderer
 from pinball_env.table import Table
-from pinball_env.vector_env import PinballVectorEnv
+from pinball_env.vector_env import EnvAttribute, PinballVectorEnv
 
 # Seeds an unlimited env (num_layouts=0) draws from: [start_layout, start_layout + this).
 UNLIMITED_LAYOUTS = 2**31
 # Generated tables kept in memory (a table is about 50 KB; generating one takes 0.1-0.2 s).
 CACHED_TABLES = 512
+# Threads that generate the tables a reset needs at once (the playability check's simulation
+# releases the GIL, so they share the cores).
+GENERATION_THREADS = min(os.cpu_count() or 1, 8)
+# Tables that take longer than this to make show their progress on stderr [s], every so often [s].
+PROGRESS_AFTER = 2.0
+PROGRESS_EVERY = 1.0
 # Rays see this far [m]; a ray that meets nothing reads 1.
 RAY_RANGE = 0.5
 MAX_RAYS = 64
@@ -47,15 +59,24 @@ def layout_table(seed: int, difficulty: str) -> Table:
     return generate_table(seed, difficulty)
 
 
-@functools.cache
-def _prefetcher() -> ThreadPoolExecutor:
-    """The thread that generates the tables of the games to come (its simulation releases the
-    GIL, so it runs beside the training on a second core)."""
-    return ThreadPoolExecutor(1, thread_name_prefix="pinball-layouts")
+def frame_size(difficulty: str) -> tuple[int, int]:
+    """(width, height) in pixels of the playfield of every rendered frame of ``difficulty``'s
+    tables (the scoreboard is beside it): the largest table the generator draws (``RANGES``)
+    at the render scale, rounded up to even numbers (as video encoders need); each table is
+    fitted into it (``FrameRenderer``)."""
+    ranges = RANGES[difficulty]
+    size = (ranges.width[1], ranges.width[1] * ranges.aspect[1])  # [m]
+    width, height = (2 * math.ceil(round(metres * PIXELS_PER_METRE) / 2) for metres in size)
+    return width, height
 
 
 class Layouts:
-    """The layouts an env plays: seeds ``[start, start + count)``, ``count`` 0 for unlimited."""
+    """The layouts an env plays, seeds ``[start, start + count)`` (``count`` 0: unlimited), and
+    the making of their tables, which belongs to the env: the table of each env's next game is
+    generated on a thread in the background while this one is played, and tables needed at
+    once (a reset's) on ``GENERATION_THREADS`` threads. Fork-safe: a forked child has none of
+    its parent's threads, so it forgets the work pending there and starts its own threads.
+    Which layouts are drawn does not depend on any of this."""
 
     def __init__(self, count: int, start: int, difficulty: str) -> None:
         for name, value in (("num_layouts", count), ("start_layout", start)):
@@ -66,7 +87,11 @@ class Layouts:
         self.start = int(start)
         self.difficulty = difficulty
         self._upcoming: dict[int, int] = {}  # env -> the layout of its next game
-        self._pending: dict[int, Future] = {}  # layout -> its table, being generated
+        self._to_prefetch: list[int] = []  # upcoming layouts not yet sent to the prefetcher
+        self._pending: dict[int, Future[Table]] = {}  # layout -> its table, being generated
+        self._prefetcher: ThreadPoolExecutor | None = None  # one thread, beside the training
+        self._generators: ThreadPoolExecutor | None = None  # for the tables needed now
+        self._pid = os.getpid()  # the process whose threads the executors have
         if self.start + (self.count or UNLIMITED_LAYOUTS) - 1 > MAX_SEED:
             raise ValueError(f"layouts beyond seed {MAX_SEED}: lower start_layout")
 
@@ -84,31 +109,107 @@ class Layouts:
 
     def pick(self, env: int, rng: np.random.Generator, chosen: object = None) -> int:
         """The layout of env ``env``'s next game: ``chosen`` (checked), or the one drawn for it
-        at its last game. Then the one after is drawn, and generated in the background while
-        this game is played (unlimited layouts would wait for each table otherwise)."""
+        at its last game. Then the one after is drawn; the next :meth:`tables` has it generated
+        in the background while this game is played (unlimited layouts would wait for each
+        table otherwise)."""
         if chosen is not None:
             return self.check(chosen)
         layout = self._upcoming.pop(env, None)
         if layout is None:
             layout = self.draw(rng)
         self._upcoming[env] = upcoming = self.draw(rng)
-        if upcoming not in self._pending and len(self._pending) < CACHED_TABLES:
-            self._pending[upcoming] = _prefetcher().submit(layout_table, upcoming, self.difficulty)
+        self._to_prefetch.append(upcoming)
         return layout
 
-    def forget(self) -> None:
-        """Drop the layouts drawn ahead (the envs' random generators were seeded again)."""
+    def forget(self, envs: Iterable[int] | None = None) -> None:
+        """Drop the layouts drawn ahead for ``envs`` (default: all), whose random generators
+        were seeded again."""
+        if envs is not None:
+            for env in envs:
+                self._upcoming.pop(int(env), None)
+            return
         self._upcoming.clear()
+        self._to_prefetch.clear()
         self._pending.clear()  # their tables still land in the cache
 
     def table(self, layout: int) -> Table:
-        pending = self._pending.pop(layout, None)
-        if pending is not None:
-            return pending.result()
-        return layout_table(layout, self.difficulty)
+        """The table of ``layout`` (see :meth:`tables`)."""
+        return self.tables([layout])[layout]
+
+    def tables(self, layouts: Iterable[int]) -> dict[int, Table]:
+        """The tables of ``layouts``, by layout: cached, awaited where the background thread has
+        begun them, or generated now, on threads if more than one (with progress on stderr
+        when that takes a while). Then the layouts drawn ahead by :meth:`pick` are sent to the
+        background thread."""
+        self._in_this_process()
+        futures: dict[int, Future[Table]] = {}
+        missing = []
+        for layout in dict.fromkeys(layouts):
+            future = self._pending.pop(layout, None)
+            if future is not None and not future.cancel():  # begun (or done): wait for it
+                futures[layout] = future
+            else:
+                missing.append(layout)
+        tables = {}
+        if len(missing) == 1:
+            tables[missing[0]] = layout_table(missing[0], self.difficulty)
+        elif missing:
+            if self._generators is None:
+                self._generators = ThreadPoolExecutor(
+                    GENERATION_THREADS, thread_name_prefix="pinball-tables"
+                )
+            for layout in missing:
+                futures[layout] = self._generators.submit(layout_table, layout, self.difficulty)
+        tables.update(self._wait(futures))
+        self._prefetch()
+        return tables
+
+    def close(self) -> None:
+        """Stop the threads (their work is dropped; a later use starts new ones)."""
+        self._in_this_process()
+        for executor in (self._prefetcher, self._generators):
+            if executor is not None:
+                executor.shutdown(wait=False, cancel_futures=True)
+        self._prefetcher = self._generators = None
+        self._pending.clear()
+
+    def _wait(self, futures: dict[int, Future[Table]]) -> dict[int, Table]:
+        """The futures' tables, once all are done; their progress on stderr after
+        PROGRESS_AFTER seconds, every PROGRESS_EVERY seconds and at the end."""
+        start = shown = time.monotonic()
+        for done, _ in enumerate(as_completed(futures.values()), 1):
+            now = time.monotonic()
+            last = done == len(futures)
+            if now - start >= PROGRESS_AFTER and (last or now - shown >= PROGRESS_EVERY):
+                shown = now
+                line = f"generating {len(futures)} {self.difficulty} tables: {done}/{len(futures)}"
+                tty = sys.stderr.isatty()  # a terminal's line is rewritten, a log gets lines
+                end = "\n" if last or not tty else ""
+                print(f"\r{line}" if tty else line, end=end, file=sys.stderr, flush=True)
+        return {layout: future.result() for layout, future in futures.items()}
+
+    def _prefetch(self) -> None:
+        """Send the layouts drawn ahead to the background thread."""
+        for layout in self._to_prefetch:
+            if layout not in self._pending and len(self._pending) < CACHED_TABLES:
+                if self._prefetcher is None:
+                    self._prefetcher = ThreadPoolExecutor(1, thread_name_prefix="pinball-layouts")
+                self._pending[layout] = self._prefetcher.submit(
+                    layout_table, layout, self.difficulty
+                )
+        self._to_prefetch.clear()
+
+    def _in_this_process(self) -> None:
+        """In a forked child: forget the parent's executors and futures (their threads are not
+        in this process: the futures would never finish, the executors never work)."""
+        if self._pid != os.getpid():
+            self._pid = os.getpid()
+            self._prefetcher = self._generators = None
+            self._pending = {}
 
     def __getstate__(self) -> dict[str, Any]:
-        return {**self.__dict__, "_pending": {}}  # a copy generates its own
+        # A copy starts its own threads, and generates again what was pending here.
+        return {**self.__dict__, "_pending": {}, "_prefetcher": None, "_generators": None}
 
 
 def state_space(game: Any, rays: int) -> spaces.Box:
@@ -212,6 +313,13 @@ class PinballProcgenEnv(PinballEnv):
     that near), so that a state policy can see the layout. ``"rgb"`` and ``"grayscale"``: the
     pictures of ``Pinball-v0``, of each game's own table.
 
+    ## Rendering
+
+    ``render_mode="rgb_array"`` frames (and the ``"human"`` window) have one size for every
+    layout of a difficulty, so that video recorders and windows take them: the playfield part
+    is :func:`frame_size` (360 x 792 pixels), each table fitted into it with its aspect kept
+    and centred (background colour around it), the scoreboard beside it: (792, 470, 3) uint8.
+
     ## Arguments
 
     ```python
@@ -254,6 +362,16 @@ class PinballProcgenEnv(PinballEnv):
         if obs_type == "state":
             self.observation_space = state_space(self.game, self.rays)
         self._rays = np.zeros((1, self.rays), dtype=np.float32)
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is not None and self._frame_renderer is None:
+            # PinballEnv.render draws with it: this table in the frame of every layout's size.
+            self._frame_renderer = FrameRenderer(self.table, *frame_size(self.layouts.difficulty))
+        return super().render()
+
+    def close(self) -> None:
+        self.layouts.close()
+        super().close()
 
     def reset(
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
@@ -308,7 +426,11 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
 
     ``reset(options={"layout": L})`` plays layout ``L`` in every env reset, or
     ``{"layout": [L0, L1, ...]}`` one per env (for evaluations on chosen layouts); later games
-    draw their layouts. ``infos["layout"]`` is each env's layout.
+    draw their layouts. ``infos["layout"]`` is each env's layout, and so is
+    ``get_attr("layout")``, with the per-env attributes of ``PinballVectorEnv`` (``table`` each
+    env's own). The tables a reset needs are generated on several threads (a line on stderr
+    shows the progress when that takes more than two seconds); the layouts drawn do not depend
+    on it. Frames (``render()``) are those of the single env, of one size for every layout.
 
     ```python
     gym.make_vec("PinballProcgen-v0", num_envs=64, num_layouts=0, start_layout=0,
@@ -359,32 +481,41 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
         self._rays = np.zeros((self.num_envs, self.rays), dtype=np.float32)
         self._renderers: dict[tuple[int, bool], Renderer] = {}
 
-    def reset(
-        self,
-        *,
-        seed: int | list[int | None] | None = None,
-        options: Mapping[str, Any] | None = None,
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        if seed is not None:
-            self.layouts.forget()
-        return super().reset(seed=seed, options=options)
+    def env_attributes(self) -> dict[str, EnvAttribute]:
+        layout = EnvAttribute(lambda env: int(self.layout[env]))
+        return {**super().env_attributes(), "layout": layout}
 
-    def _new_game(self, env: int, options: Mapping[str, Any] | None = None) -> None:
+    def close_extras(self, **kwargs: Any) -> None:
+        if hasattr(self, "layouts"):
+            self.layouts.close()
+        super().close_extras(**kwargs)
+
+    def _seeded(self, envs: Sequence[int]) -> None:
+        # Their layouts drawn ahead came from the generators they had (the others' stay, as
+        # a single env that is not reset keeps its own).
+        self.layouts.forget(None if len(envs) == self.num_envs else envs)
+
+    def _new_games(self, envs: Sequence[int], options: Mapping[str, Any] | None = None) -> None:
         options = dict(options or {})
-        layout = options.pop("layout", None)
-        if isinstance(layout, (Sequence, np.ndarray)) and not isinstance(layout, str):
-            if len(layout) != self.num_envs:
+        chosen = options.pop("layout", None)
+        if isinstance(chosen, (Sequence, np.ndarray)) and not isinstance(chosen, str):
+            if len(chosen) != self.num_envs:
                 raise ValueError(
-                    f"a list of layouts needs one per env ({self.num_envs}), got {len(layout)}"
+                    f"a list of layouts needs one per env ({self.num_envs}), got {len(chosen)}"
                 )
-            layout = layout[env]
-        rng = self._rngs[env]
-        layout = self.layouts.pick(env, rng, layout)
-        table = self.layouts.table(layout)
-        if table is not self.game.world.table_of(env):
-            self.game.set_table(env, table)
-        self.layout[env] = layout
-        self.game.new_game(env, rng, options)
+        else:
+            chosen = [chosen] * self.num_envs
+        # Every env's layout first (each drawn from the env's own generator, before its game's
+        # launch, as one env at a time would), so that their tables are generated together.
+        layouts = {int(env): self.layouts.pick(int(env), self._rngs[env], chosen[env])
+                   for env in envs}  # fmt: skip
+        tables = self.layouts.tables(layouts.values())
+        for env, layout in layouts.items():
+            table = tables[layout]
+            if table is not self.game.world.table_of(env):
+                self.game.set_table(env, table)
+            self.layout[env] = layout
+            self.game.new_game(env, self._rngs[env], options)
 
     def _observe(self) -> np.ndarray:
         if self.obs_type != "state":
@@ -413,8 +544,8 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
         if renderer is None:
             if len(self._renderers) >= CACHED_TABLES:
                 self._renderers.clear()
-            if frame:
-                renderer = Renderer(table, *render_size(table))
+            if frame:  # one frame size for every layout
+                renderer = FrameRenderer(table, *frame_size(self.layouts.difficulty))
             else:
                 renderer = obs_renderer(table, self.obs_type, self.image_size)
             self._renderers[key] = renderer
@@ -426,16 +557,12 @@ class PinballProcgenVectorEnv(PinballVectorEnv):
         infos["_layout"] = infos["_score"]
         return infos
 
-    def render(self) -> tuple[np.ndarray, ...] | None:
-        """Every env's frame, each of its own table (``render_mode="rgb_array"``)."""
+    def _render_env(self, env: int) -> np.ndarray | None:
+        """Env ``env``'s frame, of its own table in the frame of every layout's size."""
         if self.render_mode is None:
             return None
-        world = self.game.world
-        return tuple(
-            render_frame(self._renderer(int(self.layout[env]), world.table_of(env), True),
-                         self.game, env)
-            for env in range(self.num_envs)
-        )  # fmt: skip
+        renderer = self._renderer(int(self.layout[env]), self.game.world.table_of(env), True)
+        return render_frame(renderer, self.game, env)
 
 
 __all__ = [
@@ -444,6 +571,7 @@ __all__ = [
     "PinballProcgenEnv",
     "PinballProcgenVectorEnv",
     "cast_rays",
+    "frame_size",
     "layout_table",
     "observe_rays",
 ]

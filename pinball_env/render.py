@@ -4,7 +4,9 @@
 flippers through the kernel's own ``segment_offset`` and ``flipper_distance``): the static layer
 (playfield, sensors, walls, posts) once, then per frame a copy of it with the flippers and the
 ball painted over their pixel bounding boxes, for one env or a batch of envs in one call.
-:class:`Window` is a thin pygame window for ``render_mode="human"``.
+:class:`FrameRenderer` draws any table into frames of one fixed size (fitted, letterboxed), so
+that an env whose tables differ renders frames of one size. :class:`Window` is a thin pygame window
+for ``render_mode="human"``.
 
 Image row 0 is the top of the table (y = height) and x grows to the right; the centre of pixel
 (row i, column j) is the world point ((j + 0.5) * width / W, height - (i + 0.5) * height / H).
@@ -16,10 +18,12 @@ and a disc or flipper every pixel centre inside it or within 0.5 px of its outli
 import math
 import os
 from collections.abc import Sequence
+from types import ModuleType
 
 import numpy as np
 from numba import njit
 
+from pinball_env.extras import require
 from pinball_env.parallel import EnvThreads
 from pinball_env.physics.flipper import flipper_distance
 from pinball_env.physics.sweep import segment_offset
@@ -60,7 +64,11 @@ _FLIPPER_LUMA = luminance(FLIPPER)
 _BALL_LUMA = luminance(BALL)
 
 
-def render_size(table: Table, pixels_per_metre: float = 600.0) -> tuple[int, int]:
+# Scale of rendered frames (render()), as opposed to observations, which have a size in pixels.
+PIXELS_PER_METRE = 600.0
+
+
+def render_size(table: Table, pixels_per_metre: float = PIXELS_PER_METRE) -> tuple[int, int]:
     """(width, height) in pixels for an aspect-correct picture of the table."""
     if not pixels_per_metre > 0.0:
         raise ValueError(f"pixels_per_metre must be positive, got {pixels_per_metre!r}")
@@ -173,6 +181,51 @@ class Renderer:
         ball = np.array([ball_position if visible else (0.0, 0.0)], dtype=np.float64)
         angles = np.array([flipper_angles], dtype=np.float64).reshape(1, -1)
         return self.frames(ball, np.array([visible]), angles, grayscale)[0]
+
+
+def fit_size(table: Table, width: int, height: int) -> tuple[int, int]:
+    """(width, height) in pixels of the largest aspect-correct picture of the table that fits in
+    ``width`` x ``height``."""
+    scale = min(width / table.width, height / table.height)
+    return (
+        min(width, max(1, round(table.width * scale))),
+        min(height, max(1, round(table.height * scale))),
+    )
+
+
+class FrameRenderer(Renderer):
+    """A :class:`Renderer` whose images are ``width`` x ``height`` whatever the table: the table
+    drawn as large as fits with its aspect kept (:func:`fit_size`), centred, the margins the
+    background colour. An env whose tables differ in size renders frames of one size with it
+    (video recorders and windows need one size)."""
+
+    def __init__(self, table: Table, width: int, height: int) -> None:
+        if width < 1 or height < 1:
+            raise ValueError(f"image size must be at least 1x1, got {width}x{height}")
+        inner_width, inner_height = fit_size(table, width, height)
+        super().__init__(table, inner_width, inner_height)  # the table's picture
+        self.width, self.height = int(width), int(height)  # the images'
+        # The picture's place in them: rows from top, columns from left.
+        self.top = (self.height - inner_height) // 2
+        self.left = (self.width - inner_width) // 2
+
+    def frames(
+        self,
+        balls: np.ndarray,
+        visible: np.ndarray,
+        flipper_angles: np.ndarray,
+        grayscale: bool = False,
+        out: np.ndarray | None = None,
+        threads: EnvThreads | None = None,
+    ) -> np.ndarray:
+        """:meth:`Renderer.frames`, each image (N, height, width, C) with the table centred."""
+        tables = super().frames(balls, visible, flipper_angles, grayscale, threads=threads)
+        n, rows, columns, channels = tables.shape
+        if out is None:
+            out = np.empty((n, self.height, self.width, channels), dtype=np.uint8)
+        out[...] = luminance(BACKGROUND) if grayscale else BACKGROUND
+        out[:, self.top : self.top + rows, self.left : self.left + columns] = tables
+        return out
 
 
 def _rgb(colour: Colour) -> np.ndarray:
@@ -335,17 +388,16 @@ def scoreboard(
 class Window:
     """A pygame window showing frames at a fixed rate (render_mode="human")."""
 
-    def __init__(self, size: tuple[int, int], fps: float, title: str = "Pinball") -> None:
+    @staticmethod
+    def import_pygame() -> ModuleType:
+        """pygame, or ``MissingDependency`` (Gymnasium's DependencyNotInstalled) with a one-line
+        install hint that fits an installed package and a checkout (the ``render`` extra)."""
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
-        try:
-            import pygame
-        except ImportError as error:
-            from gymnasium.error import DependencyNotInstalled
+        pygame = require("pygame")
+        return pygame
 
-            raise DependencyNotInstalled(
-                'pygame is not installed: pip install -e ".[render]"'
-            ) from error
-        self._pygame = pygame
+    def __init__(self, size: tuple[int, int], fps: float, title: str = "Pinball") -> None:
+        pygame = self._pygame = self.import_pygame()
         self.size = (int(size[0]), int(size[1]))
         self.fps = float(fps)
         pygame.display.init()
@@ -365,6 +417,10 @@ class Window:
         pygame.event.pump()
         pygame.display.flip()
         self._clock.tick(self.fps)
+
+    def quit_requested(self) -> bool:
+        """Whether the window was asked to close (a QUIT event waits in the queue)."""
+        return bool(self._pygame.event.peek(self._pygame.QUIT))
 
     def close(self) -> None:
         """Close the window (safe to call twice)."""

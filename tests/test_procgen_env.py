@@ -161,3 +161,20 @@ def test_bad_procgen_options_are_clear_errors(kwargs, message):
         PinballProcgenEnv(**kwargs)
     with pytest.raises(ValueError, match=message):
         PinballProcgenVectorEnv(num_envs=2, **kwargs)
+
+
+def test_a_reset_generates_its_tables_together_and_shows_progress(monkeypatch, capsys):
+    from pinball_env import procgen_env
+
+    monkeypatch.setattr(procgen_env, "PROGRESS_AFTER", 0.0)  # show it however quick
+    monkeypatch.setattr(procgen_env, "PROGRESS_EVERY", 0.0)
+    vector = PinballProcgenVectorEnv(num_envs=4, num_layouts=0, start_layout=7_000_000)
+    capsys.readouterr()
+    _, infos = vector.reset(seed=0)
+    layouts = sorted(set(infos["layout"].tolist()))
+    shown = capsys.readouterr().err.replace("\r", "\n").splitlines()
+    count = len(layouts)
+    assert count > 1 and f"generating {count} easy tables: {count}/{count}" in shown
+    for env, layout in enumerate(infos["layout"]):
+        assert vector.get_attr("table")[env] is layout_table(int(layout), "easy")
+    assert vector.get_attr("table")[0] == procgen_env.generate_table(int(infos["layout"][0]))

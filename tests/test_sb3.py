@@ -57,3 +57,29 @@ def test_sb3_trains_on_the_native_vector_env(algorithm):
     assert model.num_timesteps >= 512
     action, _ = model.predict(env.reset(), deterministic=True)
     assert env.action_space.contains(action[0])
+
+
+def test_attributes_and_methods_are_each_envs_own():
+    venv = gym.make_vec("PinballProcgen-v0", num_envs=3, num_layouts=3, render_mode="rgb_array")
+    env = SB3VecEnv(venv)
+    env.seed(0)
+    env.reset()
+    layouts = venv.get_attr("layout")
+    assert env.get_attr("layout") == list(layouts) and len(set(layouts)) > 1
+    assert [t.name for t in env.get_attr("table")] == [f"procgen:{n}" for n in layouts]
+    assert env.get_attr("layout", indices=[2, 0]) == [layouts[2], layouts[0]]
+    assert env.get_attr("render_mode", indices=1) == ["rgb_array"]  # shared
+    frames = env.env_method("render", indices=[1])
+    assert len(frames) == 1 and frames[0].tobytes() == venv.render()[1].tobytes()
+    assert env.env_method("render")[2].tobytes() == venv.render()[2].tobytes()
+    env.set_attr("note", "left", indices=[0])  # a user's attribute, per env
+    env.set_attr("note", "right", indices=[1, 2])
+    assert env.get_attr("note") == ["left", "right", "right"]
+    env.set_attr("max_episode_steps", 100)  # shared: for every env at once
+    assert venv.max_episode_steps == 100
+    with pytest.raises(ValueError, match="shared by every env"):
+        env.set_attr("max_episode_steps", 50, indices=[0])
+    with pytest.raises(ValueError, match="acting on every env"):
+        env.env_method("close_extras", indices=[0])
+    with pytest.raises(AttributeError, match="read-only"):
+        env.set_attr("layout", 1, indices=[0])

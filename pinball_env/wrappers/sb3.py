@@ -16,16 +16,11 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from pinball_env.extras import require
 from pinball_env.vector_env import PinballVectorEnv
 
-try:
-    from stable_baselines3.common.vec_env import VecEnv
-except ImportError as error:  # pragma: no cover - depends on the install
-    from gymnasium.error import DependencyNotInstalled
-
-    raise DependencyNotInstalled(
-        'SB3VecEnv needs stable-baselines3: pip install -e ".[train]"'
-    ) from error
+require("stable_baselines3")
+from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
 
 
 class SB3VecEnv(VecEnv):
@@ -37,7 +32,11 @@ class SB3VecEnv(VecEnv):
     keys, ``TimeLimit.truncated`` every step, and ``terminal_observation`` and ``episode``
     (``r``, ``l``, ``t``, as SB3's ``Monitor`` writes them) when its episode ends. ``seed(s)``
     seeds env i with ``s + i`` at the next reset. ``get_attr``, ``set_attr`` and
-    ``env_method`` act on the one vector env, whose attributes every env shares.
+    ``env_method`` act on each env of ``indices`` (default: all) as the vector env's
+    ``env_attr``, ``set_env_attr`` and ``call_env`` do (see ``PinballVectorEnv``): per-env
+    attributes such as ``table``, ``layout`` (procgen) or ``np_random`` are each env's own,
+    the vector env's attributes are shared (``set_attr`` of one of them needs every env), and
+    other names are the user's, per env.
     """
 
     def __init__(self, venv: PinballVectorEnv) -> None:
@@ -95,21 +94,29 @@ class SB3VecEnv(VecEnv):
         return [None] * self.num_envs if frames is None else list(frames)
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        return [getattr(self.venv, attr_name)] * len(self._indices(indices))
+        return [self.venv.env_attr(env, attr_name) for env in self._indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
-        if len(self._indices(indices)) != self.num_envs:
-            raise ValueError("the envs share one vector env: set an attribute for all of them")
-        setattr(self.venv, attr_name, value)
+        envs = self._indices(indices)
+        if self._every_env(envs):  # then a shared attribute too
+            self.venv.set_attr(attr_name, [value] * self.num_envs)
+            return
+        for env in envs:
+            self.venv.set_env_attr(env, attr_name, value)
 
     def env_method(
         self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any
     ) -> list[Any]:
-        result = getattr(self.venv, method_name)(*method_args, **method_kwargs)
-        return [result] * len(self._indices(indices))
+        envs = self._indices(indices)
+        if self._every_env(envs):  # then a method of the vector env too, called once
+            return list(self.venv.call(method_name, *method_args, **method_kwargs))
+        return [self.venv.call_env(env, method_name, *method_args, **method_kwargs) for env in envs]
 
     def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
         return [False] * len(self._indices(indices))
+
+    def _every_env(self, envs: list[int]) -> bool:
+        return sorted(envs) == list(range(self.num_envs))
 
     def _indices(self, indices: Any) -> list[int]:
         if indices is None:
