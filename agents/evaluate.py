@@ -245,9 +245,11 @@ def record_video(
 def watch_games(
     config: AnyConfig, stats: ObsNormalization | None,
     make_policy: Callable[[Any, int], Policy], first: int, episodes: int,
+    fps: float | None = None,
 ) -> dict[str, Any]:  # fmt: skip
     """Play the games on seeds ``first..first + episodes - 1`` in a pygame window at real
-    speed: every frame, those a step runs on included, at the table's frame rate."""
+    speed (or ``fps`` frames per second): every frame, those a step runs on included, at the
+    table's frame rate. Closing the window or Ctrl-C stops."""
     from pinball_env.render import Window
 
     venv = make_env(config, num_envs=1, seed=first, frozen=stats, render=True)
@@ -260,9 +262,10 @@ def watch_games(
         nonlocal window, closed
         frame = venv.get_images()[0]
         if window is None:
-            window = Window((frame.shape[1], frame.shape[0]), game.table.simulation.frame_rate)
+            rate = fps or game.table.simulation.frame_rate
+            window = Window((frame.shape[1], frame.shape[0]), rate, f"Pinball: {config.label}")
         window.show(frame)
-        closed = closed or bool(window._pygame.event.peek(window._pygame.QUIT))
+        closed = closed or window.quit_requested()
 
     scores = []
     game.on_frame = show

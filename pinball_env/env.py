@@ -1,5 +1,6 @@
 """``PinballEnv``: the Gymnasium shell around the game rules and the swept-collision physics."""
 
+import itertools
 import os
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -44,6 +45,10 @@ class PinballEnv(gym.Env):
     ``action_type="multibinary"``: ``MultiBinary(2)``, (left button, right button).
     A button acts for the whole step (one frame, 1/60 s, or ``frame_skip`` frames): held, the
     flipper swings up to its stop and stays there; released, it falls back to rest.
+
+    On the keyboard (``get_keys_to_action``, for ``gymnasium.utils.play.play`` and
+    ``python -m pinball_env.tools.play``): left flipper Left Shift, Z or the left arrow; right
+    flipper Right Shift, M or the right arrow.
 
     ## Observation Space
 
@@ -137,10 +142,11 @@ class PinballEnv(gym.Env):
     - ``image_size``: (height, width) of image observations, in pixels, or one int for a square.
     - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
       pymunk, for cross-checks; needs the ``crosscheck`` extra).
-    - ``render_mode``: ``"human"`` (a pygame window at ``render_fps``, needs the ``render``
-      extra) or ``"rgb_array"`` (an aspect-correct uint8 HxWx3 frame, no display needed). A
-      frame shows the playfield (the ball where it drained once the game is over) and beside it
-      a scoreboard with the score and the balls left.
+    - ``render_mode``: ``"human"`` (a pygame window at real speed, frame rate over
+      ``frame_skip`` steps per second, needs the ``render`` extra; ``metadata["render_fps"]`` is
+      that rate rounded to an int, at least 1) or ``"rgb_array"`` (an aspect-correct uint8
+      HxWx3 frame, no display needed). A frame shows the playfield (the ball where it drained
+      once the game is over) and beside it a scoreboard with the score and the balls left.
 
     ## Version History
 
@@ -148,6 +154,12 @@ class PinballEnv(gym.Env):
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 60}
+    # The keyboard's flipper buttons (pygame key names), by button: get_keys_to_action's map,
+    # which gymnasium.utils.play and python -m pinball_env.tools.play both use.
+    FLIPPER_KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "left": ("K_LSHIFT", "K_z", "K_LEFT"),
+        "right": ("K_RSHIFT", "K_m", "K_RIGHT"),
+    }
 
     def __init__(
         self,
@@ -178,10 +190,10 @@ class PinballEnv(gym.Env):
         self.obs_type = obs_type
         self.action_type = action_type
         self.render_mode = render_mode
-        self.metadata = {
-            **self.metadata,
-            "render_fps": self.table.simulation.frame_rate / self.game.frame_skip,
-        }
+        # Steps per second at real speed; the metadata holds it rounded, as an int, which
+        # gymnasium.utils.play requires; windows (ours, the play tool's) keep the exact rate.
+        self.steps_per_second = self.table.simulation.frame_rate / self.game.frame_skip
+        self.metadata = {**self.metadata, "render_fps": max(1, round(self.steps_per_second))}
 
         self.action_space, self.observation_space = make_spaces(
             self.game, obs_type, self.image_size
@@ -230,7 +242,7 @@ class PinballEnv(gym.Env):
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:
-            self._window = Window((frame.shape[1], frame.shape[0]), self.metadata["render_fps"])
+            self._window = Window((frame.shape[1], frame.shape[0]), self.steps_per_second)
         self._window.show(frame)
         return None
 
@@ -244,6 +256,32 @@ class PinballEnv(gym.Env):
         state = self.__dict__.copy()
         state["_window"] = None
         return state
+
+    def get_keys_to_action(self) -> dict[tuple[int, ...], int | np.ndarray]:
+        """The keyboard map of ``gymnasium.utils.play.play``: every non-empty set of the
+        :attr:`FLIPPER_KEYS` (a sorted tuple of pygame key codes) -> the action pressing the
+        buttons of its keys. Actions are ints for ``action_type="discrete"`` and int8 (left,
+        right) arrays for ``"multibinary"`` (then pass ``noop=np.array([0, 0])`` to ``play``,
+        whose default noop, 0, is not a MultiBinary action). Needs pygame for the key codes."""
+        pygame = Window.import_pygame()
+        keys = [
+            (getattr(pygame, name), button)
+            for button, names in enumerate(self.FLIPPER_KEYS[b] for b in BUTTONS)
+            for name in names
+        ]
+        # play looks up exactly the set of keys held, so every combination needs an entry.
+        mapping: dict[tuple[int, ...], int | np.ndarray] = {}
+        for count in range(1, len(keys) + 1):
+            for combination in itertools.combinations(keys, count):
+                pressed = np.zeros(len(BUTTONS), dtype=bool)
+                pressed[[button for _, button in combination]] = True
+                codes = tuple(sorted(code for code, _ in combination))
+                if self.action_type == "discrete":
+                    # The action whose row of DISCRETE_BUTTONS is the pressed buttons.
+                    mapping[codes] = int(np.flatnonzero((pressed == DISCRETE_BUTTONS).all(1))[0])
+                else:
+                    mapping[codes] = pressed.astype(np.int8)
+        return mapping
 
     @property
     def reward_scale(self) -> float:

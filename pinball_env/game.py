@@ -328,8 +328,8 @@ class Game:
                 and actions.min() >= 0
                 and actions.max() < len(DISCRETE_BUTTONS)
             )
-            if valid:
-                return DISCRETE_BUTTONS[actions]
+            if valid:  # (as integers: a bool array would index as a mask)
+                return DISCRETE_BUTTONS[actions.astype(np.intp)]
             expected = f"({self.n_envs},) integers in [0, {len(DISCRETE_BUTTONS)})"
         else:
             shape = (self.n_envs, len(BUTTONS))

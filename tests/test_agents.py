@@ -526,3 +526,30 @@ def test_the_progress_bar_counts_down_to_max_minutes(monkeypatch):
     assert unlimited.bar.total == config.total_timesteps
     bar.close()
     unlimited.close()
+
+
+def test_watching_shows_every_frame_of_the_evaluated_games(tmp_path, monkeypatch):
+    import pygame
+
+    from pinball_env.render import Window
+
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs")  # skip_above: long steps
+    summary = evaluate.main(["--model", str(run), "--episodes", "2", "--out", str(tmp_path / "e")])
+    with open(tmp_path / "e" / "episodes.csv") as file:
+        rows = list(csv.DictReader(file))
+    shown = []
+    monkeypatch.setattr(Window, "show", lambda self, frame: shown.append(frame.shape))
+    trained = load_policy(run)
+
+    def player(venv, seed):
+        return lambda obs, infos: trained.act(obs)
+
+    watched = evaluate.watch_games(trained.config, trained.normalization, player, 100_000, 2)
+    assert watched["scores"] == [int(row["score"]) for row in rows] and summary["episodes"] == 2
+    assert len(shown) == sum(int(row["length"]) for row in rows)  # every frame, at real speed
+    assert len(set(shown)) == 1
+    # Closing the window stops.
+    pygame.display.init()
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    stopped = evaluate.watch_games(trained.config, trained.normalization, player, 100_000, 2)
+    assert stopped["episodes"] == 0

@@ -474,3 +474,14 @@ def test_reward_scale_accepts_numpy_numbers_and_rejects_bools():
     assert gym.make("Pinball-v0", reward_scale=np.float32(0.5)).unwrapped.reward_scale == 0.5
     with pytest.raises(ValueError, match="reward_scale must be a finite number"):
         gym.make("Pinball-v0", reward_scale=True)
+
+
+def test_a_bool_action_is_the_discrete_action_it_equals():
+    """Gymnasium's Discrete(4) contains True (== 1): it holds the left flipper, as 1 does."""
+    envs = [gym.make("Pinball-v0") for _ in range(2)]
+    for env in envs:
+        env.reset(seed=3)
+    for _ in range(5):
+        as_bool, as_int = envs[0].step(True), envs[1].step(1)
+        np.testing.assert_array_equal(as_bool[0], as_int[0])
+    assert envs[0].action_space.contains(True)

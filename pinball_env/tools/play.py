@@ -1,0 +1,592 @@
+"""Play ``Pinball-v0`` on the keyboard: ``python -m pinball_env.tools.play``.
+
+``python -m pinball_env.tools.play [--table NAME] [--seed S] [--record FILE]`` opens a pygame
+window (the ``render`` extra) and plays at real speed, one env step per frame (the table's
+frame rate, 60 frames per second), with the score and the balls left on the scoreboard.
+``--replay FILE [--headless]`` plays a recording back and checks that every game scores what
+was recorded.
+
+Keys (the flipper keys are ``PinballEnv.FLIPPER_KEYS``, the map of ``get_keys_to_action``):
+
+============================  ===========================================
+Left Shift, Z, Left arrow     left flipper (held: up)
+Right Shift, M, Right arrow   right flipper
+P or Space                    pause / resume
+R                             restart: a new game, with the next seed
+Esc or Q, closing the window  quit
+============================  ===========================================
+
+Recordings (``--record FILE``) are JSON, one file per session holding every game played in it,
+in order: a game ends at game over, at the time limit, at a restart (R) or when the window is
+closed, and the file is rewritten as each game ends (a game with no step is not kept)::
+
+    {
+      "format": "pinball-env-recording",  "version": 1,
+      "package_version": "0.1.0",          // pinball_env.__version__
+      "env_id": "Pinball-v0",
+      "options": {"table": "classic"},     // every gym.make option passed
+      "max_episode_steps": 7200,           // the TimeLimit of the env played
+      "table_sha256": "...",               // the table played (a table file may change)
+      "games": [
+        {"seed": 5, "actions": "0011130...", "score": 1230, "frames": 2410,
+         "end": "game over"}               // or "time limit", "restart", "quit"
+      ]
+    }
+
+``actions`` holds one digit per step, the ``Discrete(4)`` action (0 none, 1 left, 2 right,
+3 both). :func:`load_recording` refuses, naming the problem, a file that is not such a
+recording (bad JSON, a missing or unknown key, a wrong type, an action outside 0-3), one of
+another format version or package version, and :func:`replay` one whose table is not the
+recorded one; a replay that does not end as recorded (the same score, frames and end) raises
+:class:`RecordingError`, so a recording is never taken for a different game.
+"""
+
+import argparse
+import dataclasses
+import hashlib
+import json
+import os
+import re
+import secrets
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from pinball_env import __version__  # importing the package registers Pinball-v0
+from pinball_env.env import PinballEnv
+from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Window
+from pinball_env.table import Table, table_to_dict
+from pinball_env.tools.demo import has_display
+
+ENV_ID = "Pinball-v0"
+FORMAT = "pinball-env-recording"
+FORMAT_VERSION = 1
+ENDS = ("game over", "time limit", "restart", "quit")
+# Options a recording cannot carry: it renders itself, and its actions are Discrete(4) digits.
+FIXED_OPTIONS = ("render_mode", "action_type")
+
+BANNER_PAUSED = "PAUSED\nP: play on"
+BANNER_OVER = "GAME OVER\nR: new game, Q: quit"
+
+EventSource = Callable[[], Iterable[Any]]  # returns the pygame events of one frame
+
+
+class RecordingError(ValueError):
+    """A recording that cannot be replayed, or a replay that did not end as recorded."""
+
+
+class ReplayStopped(Exception):
+    """The viewer closed the window of a replay before its last game ended."""
+
+
+@dataclasses.dataclass(frozen=True)
+class GameRecord:
+    """One game of a recording: its seed, one action digit per step, and how it ended."""
+
+    seed: int
+    actions: str
+    score: int
+    frames: int
+    end: str
+
+
+@dataclasses.dataclass(frozen=True)
+class Recording:
+    """The games of one play session and the env they were played on (see the module doc)."""
+
+    env_id: str
+    options: dict[str, Any]
+    max_episode_steps: int | None
+    table_sha256: str
+    games: tuple[GameRecord, ...] = ()
+    package_version: str = __version__
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "format": FORMAT,
+            "version": FORMAT_VERSION,
+            "package_version": self.package_version,
+            "env_id": self.env_id,
+            "options": self.options,
+            "max_episode_steps": self.max_episode_steps,
+            "table_sha256": self.table_sha256,
+            "games": [dataclasses.asdict(game) for game in self.games],
+        }
+
+
+# --- recordings -----------------------------------------------------------------------------
+
+
+def table_sha256(table: Table) -> str:
+    """A digest of everything a table file describes (its canonical JSON)."""
+    text = json.dumps(table_to_dict(table), sort_keys=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def make_env(
+    options: Mapping[str, Any], max_episode_steps: int | None = None, env_id: str = ENV_ID
+) -> gym.Env:
+    """The env a recording is played on: ``gym.make(env_id, **options)``, rendering frames."""
+    for key in FIXED_OPTIONS:
+        if key in options:
+            raise ValueError(f"the play tool sets {key} itself; do not pass it as an option")
+    kwargs = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
+    return gym.make(env_id, render_mode="rgb_array", **kwargs, **options)
+
+
+def write_recording(path: str | os.PathLike[str], recording: Recording) -> None:
+    """Write ``recording`` as JSON, atomically (a crash leaves the previous file whole)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text(json.dumps(recording.to_json(), indent=2) + "\n", encoding="utf-8")
+    os.replace(temporary, path)
+
+
+def load_recording(path: str | os.PathLike[str]) -> Recording:
+    """Read and check a recording (:func:`parse_recording`); RecordingError says what is wrong."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        raise RecordingError(f"{path}: cannot read the recording: {error}") from None
+    except json.JSONDecodeError as error:
+        raise RecordingError(f"{path}: not a JSON recording: {error}") from None
+    return parse_recording(data, str(path))
+
+
+def parse_recording(data: Any, source: str = "recording") -> Recording:
+    """The :class:`Recording` of a decoded JSON document, after checking every key and type."""
+
+    def fail(problem: str) -> RecordingError:
+        return RecordingError(f"{source}: {problem}")
+
+    if not isinstance(data, dict):
+        raise fail(f"expected a JSON object, got {type(data).__name__}")
+    if data.get("format") != FORMAT:
+        raise fail(f"not a pinball recording (format {data.get('format')!r}, expected {FORMAT!r})")
+    if data.get("version") != FORMAT_VERSION:
+        raise fail(
+            f"recording format version {data.get('version')!r}; this pinball-env reads version "
+            f"{FORMAT_VERSION}"
+        )
+    top = _fields(data, {
+        "format": str, "version": int, "package_version": str, "env_id": str, "options": dict,
+        "max_episode_steps": (int, type(None)), "table_sha256": str, "games": list,
+    }, fail, "")  # fmt: skip
+    if top["package_version"] != __version__:
+        raise fail(
+            f"recorded with pinball-env {top['package_version']}, this is {__version__}: a game "
+            "can differ between versions, so it is not replayed"
+        )
+    if top["env_id"] != ENV_ID:
+        raise fail(f"env_id {top['env_id']!r}: only {ENV_ID!r} games are recorded")
+    options = top["options"]
+    for key in FIXED_OPTIONS:
+        if key in options:
+            raise fail(f"options.{key} is set by the play tool, it cannot be recorded")
+    steps = top["max_episode_steps"]
+    if steps is not None and steps < 1:
+        raise fail(f"max_episode_steps must be None or >= 1, got {steps}")
+    if not re.fullmatch(r"[0-9a-f]{64}", top["table_sha256"]):
+        raise fail("table_sha256 must be 64 lowercase hex digits")
+    if not top["games"]:
+        raise fail("games is empty: the recording holds no game")
+    games = []
+    for index, raw in enumerate(top["games"]):
+        where = f"games[{index}]."
+        if not isinstance(raw, dict):
+            raise fail(f"games[{index}] must be an object, got {type(raw).__name__}")
+        game = _fields(
+            raw, {"seed": int, "actions": str, "score": int, "frames": int, "end": str}, fail, where
+        )
+        for key in ("seed", "score", "frames"):
+            if game[key] < 0:
+                raise fail(f"{where}{key} must be >= 0, got {game[key]}")
+        bad = re.search(r"[^0-3]", game["actions"])
+        if bad is not None:
+            raise fail(
+                f"{where}actions: {bad.group()!r} at step {bad.start()} is not an action "
+                "(one digit 0-3 per step)"
+            )
+        if not game["actions"]:
+            raise fail(f"{where}actions is empty")
+        if game["end"] not in ENDS:
+            raise fail(f"{where}end must be one of {ENDS}, got {game['end']!r}")
+        games.append(GameRecord(**game))
+    return Recording(
+        env_id=top["env_id"],
+        options=options,
+        max_episode_steps=steps,
+        table_sha256=top["table_sha256"],
+        games=tuple(games),
+        package_version=top["package_version"],
+    )
+
+
+def _fields(
+    raw: dict[str, Any],
+    types: dict[str, type | tuple[type, ...]],
+    fail: Callable[[str], RecordingError],
+    where: str,
+) -> dict[str, Any]:
+    """``raw`` with exactly the keys of ``types``, each of its type (a bool is not an int)."""
+    unknown = sorted(set(raw) - set(types))
+    if unknown:
+        raise fail(f"unknown key {where}{unknown[0]}")
+    for key, kind in types.items():
+        if key not in raw:
+            raise fail(f"missing key {where}{key}")
+        value = raw[key]
+        if isinstance(value, bool) or not isinstance(value, kind):
+            expected = kind.__name__ if isinstance(kind, type) else "an int or null"
+            raise fail(f"{where}{key} must be {expected}, got {json.dumps(value)[:40]}")
+    return raw
+
+
+def replay(
+    recording: Recording,
+    window: bool = False,
+    fps: float | None = None,
+    events: EventSource | None = None,
+) -> list[int]:
+    """Play every game of ``recording`` again and return their scores, checking that each ends
+    as recorded (the score, the frames, and game over / time limit / unfinished); raises
+    RecordingError if the table or any game differs. ``window``: show it (at real speed, or
+    ``fps``; 0 is as fast as it goes), where P or Space pauses and Esc, Q or closing the window
+    raises ReplayStopped."""
+    try:
+        env = make_env(recording.options, recording.max_episode_steps, recording.env_id)
+    except (TypeError, ValueError, OSError) as error:
+        raise RecordingError(f"the recording's options do not make a game: {error}") from None
+    try:
+        if table_sha256(env.unwrapped.table) != recording.table_sha256:
+            raise RecordingError(
+                f"the table {recording.options.get('table', 'classic')!r} is not the recorded one "
+                "(its file has changed since): not replayed"
+            )
+        screen = _Screen(env, fps, "Pinball replay") if window else None
+        try:
+            return [
+                _replay_game(env, game, n, screen, events) for n, game in enumerate(recording.games)
+            ]
+        finally:
+            if screen is not None:
+                screen.close()
+    finally:
+        env.close()
+
+
+def _replay_game(
+    env: gym.Env, game: GameRecord, index: int, screen: "_Screen | None", events: EventSource | None
+) -> int:
+    name = f"game {index + 1} (seed {game.seed})"
+    _, info = env.reset(seed=game.seed)
+    ended: str | None = None
+    paused, step = False, 0
+    while step < len(game.actions):
+        if screen is not None:
+            for event in (events or screen.pygame.event.get)():
+                command = screen.command(event)
+                if command == "quit":
+                    raise ReplayStopped(f"replay stopped in {name}")
+                paused ^= command == "pause"
+            screen.show(env, "PAUSED" if paused else None)
+            if paused:
+                continue
+        if ended is not None:
+            raise RecordingError(
+                f"{name}: the replay ended ({ended}) at step {step} of {len(game.actions)}; the "
+                "recording is of a different game"
+            )
+        _, _, terminated, truncated, info = env.step(int(game.actions[step]))
+        step += 1
+        ended = "game over" if terminated else "time limit" if truncated else None
+    expected_end = game.end if game.end in ("game over", "time limit") else None
+    got = (info["score"], info["frames"], ended)
+    want = (game.score, game.frames, expected_end)
+    if got != want:
+        raise RecordingError(
+            f"{name}: the replay scored {got[0]} in {got[1]} frames ({got[2] or 'unfinished'}), "
+            f"the recording says {want[0]} in {want[1]} ({want[2] or 'unfinished'})"
+        )
+    return int(info["score"])
+
+
+# --- the window -----------------------------------------------------------------------------
+
+
+class _Screen:
+    """The window of a game: frames at real speed, a banner over the playfield, the controls."""
+
+    def __init__(self, env: gym.Env, fps: float | None, title: str) -> None:
+        self.pygame = Window.import_pygame()
+        self.pygame.display.init()  # the event queue works from here; the window opens later
+        self.fps = env.unwrapped.steps_per_second if fps is None else fps
+        self.window: Window | None = None  # opened by the first frame, at its size
+        self.title = title
+        self._caption = title
+        self.command_keys = {getattr(self.pygame, name): c for name, c in COMMAND_KEYS.items()}
+        try:
+            self.pygame.font.init()
+            self.font: Any = self.pygame.font.Font(None, 34)
+        except (ImportError, NotImplementedError, RuntimeError):  # pygame built without fonts
+            self.font = None
+
+    def command(self, event: Any) -> str | None:
+        """The command of an event: "quit" (a quit key, or the window closed), "pause",
+        "restart", or None."""
+        if event.type == self.pygame.QUIT:
+            return "quit"
+        if event.type == self.pygame.KEYDOWN:
+            return self.command_keys.get(event.key)
+        return None
+
+    def show(self, env: gym.Env, banner: str | None) -> None:
+        frame = env.render()
+        if banner is not None:
+            frame = self._banner(frame, banner)
+        caption = f"{self.title}: {banner}" if banner else self.title
+        if self.window is None:
+            self.window = Window((frame.shape[1], frame.shape[0]), self.fps, self.title)
+        if caption != self._caption:  # the caption says it too, should the font be missing
+            self.pygame.display.set_caption(caption)
+            self._caption = caption
+        self.window.show(frame)
+
+    def _banner(self, frame: np.ndarray, text: str) -> np.ndarray:
+        """``frame`` with the lines of ``text`` in a box at the middle of the playfield."""
+        if self.font is None:
+            return frame
+        lines = [
+            self.pygame.surfarray.array3d(
+                self.font.render(line, True, SCOREBOARD_TEXT, BACKGROUND)
+            ).swapaxes(0, 1)
+            for line in text.split("\n")
+        ]
+        pad = 8  # [px] of background around the text
+        height = sum(line.shape[0] for line in lines) + 2 * pad
+        width = max(line.shape[1] for line in lines) + 2 * pad
+        playfield = frame.shape[1] - SCOREBOARD_WIDTH
+        top = max(0, (frame.shape[0] - height) // 2)
+        frame = frame.copy()
+        frame[top : top + height, max(0, (playfield - width) // 2) : (playfield + width) // 2] = (
+            BACKGROUND
+        )
+        top += pad
+        for line in lines:
+            left = max(0, (playfield - line.shape[1]) // 2)
+            area = frame[top : top + line.shape[0], left : left + line.shape[1]]
+            area[...] = line[: area.shape[0], : area.shape[1]]
+            top += line.shape[0]
+        return frame
+
+    def close(self) -> None:
+        if self.window is not None:
+            self.window.close()
+        self.pygame.display.quit()
+
+
+# The command keys (pygame key names, as PinballEnv.FLIPPER_KEYS: no pygame needed to declare).
+COMMAND_KEYS = {
+    "K_p": "pause", "K_SPACE": "pause", "K_r": "restart", "K_ESCAPE": "quit", "K_q": "quit",
+}  # fmt: skip
+
+
+# --- playing --------------------------------------------------------------------------------
+
+
+def keys_help(pygame: Any) -> str:
+    """The keys, as pygame names them, from their declarations (FLIPPER_KEYS, COMMAND_KEYS)."""
+
+    def names(keys: Iterable[str]) -> str:
+        return " / ".join(pygame.key.name(getattr(pygame, key)) for key in keys)
+
+    parts = [f"{button} flipper: {names(keys)}" for button, keys in PinballEnv.FLIPPER_KEYS.items()]
+    for command in dict.fromkeys(COMMAND_KEYS.values()):
+        parts.append(f"{command}: {names(k for k, c in COMMAND_KEYS.items() if c == command)}")
+    return "keys: " + ", ".join(parts)
+
+
+class PlayLoop:
+    """A session of games on the keyboard in a pygame window (see the module doc).
+
+    :meth:`run` plays frames until the player quits or ``max_frames`` frames were shown; it can
+    be called again to go on. Each frame takes the frame's events (``events``, by default
+    ``pygame.event.get``; tests post key events to the queue), then steps the game once unless
+    it is paused or over, and shows the frame. Held flipper keys are tracked from KEYDOWN and
+    KEYUP events (``pygame.key.get_pressed`` is not updated by every video driver).
+    :meth:`close` ends the game in play and writes the recording.
+
+    ``options``: ``gym.make`` options of ``Pinball-v0`` (``table`` defaults to ``"classic"``;
+    not ``render_mode`` or ``action_type``, which the tool sets); ``seed``: the first game's
+    (None: a random one; each restart takes the next); ``record``: the recording's path;
+    ``fps``: frames per second, None for real speed, 0 for no waiting (tests).
+    """
+
+    def __init__(
+        self,
+        options: Mapping[str, Any] | None = None,
+        seed: int | None = None,
+        record: str | os.PathLike[str] | None = None,
+        fps: float | None = None,
+    ) -> None:
+        self.options = {"table": "classic", **(options or {})}
+        self.env = make_env(self.options)
+        self.screen = _Screen(self.env, fps, "Pinball")
+        self._pygame = self.screen.pygame
+        self.keys_to_action = self.env.unwrapped.get_keys_to_action()
+        self.flipper_keys = {key for keys in self.keys_to_action for key in keys}
+        self.record = None if record is None else Path(record)
+        self.recording = Recording(
+            env_id=ENV_ID,
+            options=self.options,
+            max_episode_steps=self.env.spec.max_episode_steps if self.env.spec else None,
+            table_sha256=table_sha256(self.env.unwrapped.table),
+        )
+        self.held: set[int] = set()
+        self.paused = False
+        self.running = True
+        self.frames_shown = 0
+        self._new_game(secrets.randbelow(1_000_000) if seed is None else seed)
+
+    @property
+    def games(self) -> tuple[GameRecord, ...]:
+        """The games ended so far, in order."""
+        return self.recording.games
+
+    def _new_game(self, seed: int) -> None:
+        self.seed = seed
+        self.actions: list[int] = []
+        self.over = False
+        self.paused = False
+        self.observation, self.info = self.env.reset(seed=seed)
+
+    def _end_game(self, end: str) -> None:
+        if self.over or not self.actions:
+            return  # already recorded, or nothing played
+        self.over = True
+        game = GameRecord(
+            seed=self.seed,
+            actions="".join(map(str, self.actions)),
+            score=int(self.info["score"]),
+            frames=int(self.info["frames"]),
+            end=end,
+        )
+        self.recording = dataclasses.replace(self.recording, games=(*self.games, game))
+        summary = f"score {game.score} in {game.frames} frames ({end})"
+        print(f"game {len(self.games)} (seed {game.seed}): {summary}")
+        if self.record is not None:
+            write_recording(self.record, self.recording)
+
+    def handle(self, event: Any) -> None:
+        """Apply one pygame event: a flipper key down or up, a command, or losing focus."""
+        pygame = self._pygame
+        if event.type in (pygame.KEYDOWN, pygame.KEYUP) and event.key in self.flipper_keys:
+            if event.type == pygame.KEYDOWN:
+                self.held.add(event.key)
+            else:
+                self.held.discard(event.key)
+        elif event.type == pygame.WINDOWFOCUSLOST:
+            self.held.clear()  # the key-up of a key held then will never come
+        else:
+            command = self.screen.command(event)
+            if command == "quit":
+                self.running = False
+            elif command == "pause" and not self.over:
+                self.paused = not self.paused
+            elif command == "restart":
+                self._end_game("restart")
+                self._new_game(self.seed + 1)
+
+    @property
+    def action(self) -> int:
+        """The action of the flipper keys held now (0 when none)."""
+        return int(self.keys_to_action.get(tuple(sorted(self.held)), 0))
+
+    def tick(self) -> None:
+        """One frame: a step of the game unless paused or over, then the picture."""
+        if not (self.paused or self.over):
+            action = self.action
+            self.observation, _, terminated, truncated, self.info = self.env.step(action)
+            self.actions.append(action)
+            if terminated or truncated:
+                self._end_game("game over" if terminated else "time limit")
+        banner = BANNER_OVER if self.over else BANNER_PAUSED if self.paused else None
+        self.screen.show(self.env, banner)
+        self.frames_shown += 1
+
+    def run(self, events: EventSource | None = None, max_frames: int | None = None) -> None:
+        """Play until the player quits or ``max_frames`` more frames were shown."""
+        source = events or self._pygame.event.get
+        stop = None if max_frames is None else self.frames_shown + max_frames
+        while self.running and (stop is None or self.frames_shown < stop):
+            for event in source():
+                self.handle(event)
+            if self.running:
+                self.tick()
+
+    def close(self) -> None:
+        """End the game in play ("quit") and close the window and the env."""
+        self._end_game("quit")
+        self.screen.close()
+        self.env.close()
+
+
+def main(argv: list[str] | None = None) -> list[int]:
+    """The command line; returns the scores of the games played or replayed."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--table", help="table name or YAML path (default classic)")
+    parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")
+    modes = parser.add_mutually_exclusive_group()
+    modes.add_argument("--record", type=Path, help="write the games played to this JSON file")
+    modes.add_argument("--replay", type=Path, help="play a recording back and check its scores")
+    parser.add_argument("--headless", action="store_true", help="replay without a window")
+    args = parser.parse_args(argv)
+    if args.seed is not None and args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
+    if args.replay is not None and (args.table or args.seed is not None):
+        parser.error("--replay takes the table and the seeds from the recording")
+    if args.headless and args.replay is None:
+        parser.error("--headless is for --replay: playing needs a window")
+    window = not args.headless and has_display()
+    if window or args.replay is None:  # a headless replay needs no pygame
+        try:  # checked before anything is played
+            Window.import_pygame()
+        except gym.error.DependencyNotInstalled as error:
+            raise SystemExit(str(error)) from None
+
+    if args.replay is not None:
+        try:
+            recording = load_recording(args.replay)
+            if not window and not args.headless:
+                print("no display found: replaying headless")
+            scores = replay(recording, window=window)
+        except RecordingError as error:
+            raise SystemExit(f"refused: {error}") from None
+        except ReplayStopped as stopped:
+            print(stopped)
+            return []
+        for game, score in zip(recording.games, scores, strict=True):
+            print(f"seed {game.seed}: score {score} in {game.frames} frames, as recorded")
+        return scores
+
+    if not window:
+        raise SystemExit(
+            "no display found: playing needs a window (--replay FILE --headless replays without)"
+        )
+    print(keys_help(Window.import_pygame()))
+    loop = PlayLoop({"table": args.table or "classic"}, args.seed, args.record)
+    try:
+        loop.run()
+    finally:
+        loop.close()
+    if args.record is not None and loop.games:
+        print(f"wrote {args.record}")
+    return [game.score for game in loop.games]
+
+
+if __name__ == "__main__":
+    main()
