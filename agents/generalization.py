@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from agents.common import BASELINES, MODEL_FILE, baseline_policy, make_env
 from agents.config import ConfigError, TrainConfig, config_from_dict, load_config
-from agents.evaluate import baseline_config, rollouts
 from agents.policy import load_policy
+from agents.rollouts import BASELINES, baseline_player, play_games, trained_player
+from agents.runs import MODEL_FILE
 from agents.train import set_threads, start, train
 
 PROCGEN_ID = "PinballProcgen-v0"
@@ -55,21 +55,15 @@ def with_layouts(config: TrainConfig, count: int) -> TrainConfig:
 
 def play(config: TrainConfig, who: str, layouts: list[int], run: Path | None = None) -> np.ndarray:
     """Scores of one game per layout (env seeds ``eval_seed + i``), played by ``who``: a
-    baseline's name, or ``"model"`` (the run's)."""
+    baseline's name, or ``"model"`` (the run's), through ``config``'s env chain."""
     seeds = [config.eval_seed + i for i in range(len(layouts))]
     if who == "model":
-        trained = load_policy(run / MODEL_FILE)
-        venv = make_env(config, num_envs=len(layouts), seed=seeds[0], frozen=trained.normalization)
-
-        def act(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
-            return trained.act(obs)
-
+        if run is None:
+            raise ValueError("play: the model's games need its run folder (run=...)")
+        player, through = trained_player(run / MODEL_FILE), config
     else:
-        base = baseline_config(who, config)
-        venv = make_env(base, num_envs=len(layouts), seed=seeds[0])
-        act = baseline_policy(who, venv, seeds[0])
-    rows = rollouts(venv, act, seeds, layouts)
-    venv.close()
+        player, through = baseline_player(who, config), None  # the baseline's own config
+    rows = play_games(player, seeds, through, layouts)
     if [row["layout"] for row in rows] != list(layouts):
         raise RuntimeError(f"{who} played other layouts than the {len(layouts)} asked for")
     return np.array([row["score"] for row in rows], dtype=np.float64)

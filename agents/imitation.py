@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.common import FrameCounter
-from pinball_env.heuristic import HeuristicPolicy
+from agents.envs import FrameCounter
+from agents.rollouts import HeuristicPlayers
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 
 BATCH_SIZE = 512
@@ -32,7 +32,7 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
     frames played, summed over the envs. Fewer steps (at least one) once ``stop`` is true."""
     n = venv.num_envs
     game = venv.get_attr("game")[0]
-    players = [HeuristicPolicy(game.world.table_of(env)) for env in range(n)]
+    players = HeuristicPlayers(game.world)
     balls = game.world.balls  # the heuristic reads the ball's state, as from the env's info
     raw = getattr(venv, "get_original_obs", None)
     obs = venv.reset()
@@ -43,9 +43,9 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
             break
         observations.append(raw() if raw else obs)
         action = np.array([
-            player({"ball_position": balls[env, [BALL_X, BALL_Y]],
-                    "ball_velocity": balls[env, [BALL_VX, BALL_VY]]})
-            for env, player in enumerate(players)
+            players(env, {"ball_position": balls[env, [BALL_X, BALL_Y]],
+                          "ball_velocity": balls[env, [BALL_VX, BALL_VY]]})
+            for env in range(n)
         ])  # fmt: skip
         obs, reward, done, infos = venv.step(action)
         actions.append(action)
@@ -53,7 +53,7 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
         dones.append(done)
         frames.update(done, infos)
         for env in np.flatnonzero(done):  # a new game (maybe on a new table): a new player
-            players[env] = HeuristicPolicy(game.world.table_of(env))
+            players.new_game(env)
     return {
         "obs": np.stack(observations),
         "actions": np.stack(actions),

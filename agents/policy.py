@@ -42,14 +42,6 @@ import numpy as np
 from gymnasium import spaces
 
 import pinball_env  # noqa: F401  (registers the env ids)
-from agents import rllib
-from agents.common import (
-    AGENT_ENTRY,
-    CONFIG_FILE,
-    MODEL_FILE,
-    latest_checkpoint,
-    stats_for,
-)
 from agents.config import (
     AnyConfig,
     ConfigError,
@@ -57,6 +49,18 @@ from agents.config import (
     algorithm_class,
     config_from_dict,
     load_config,
+)
+from agents.runs import (
+    AGENT_ENTRY,
+    CONFIG_FILE,
+    FILTER_PATH,
+    MODEL_FILE,
+    MODULE_PATH,
+    STATS_FILE,
+    is_rllib_checkpoint,
+    latest_checkpoint,
+    rllib_checkpoint,
+    stats_for,
 )
 
 
@@ -234,13 +238,13 @@ class Policy:
 
 
 def load_policy(path: str | os.PathLike[str]) -> Policy:
-    """The agent saved at ``path`` (see the module's docstring)."""
+    """The agent saved at ``path`` (see the module's docstring): a run folder (its final model,
+    or its newest checkpoint while it has none), a model or checkpoint zip, or an RLlib
+    checkpoint folder. Every loading of a saved agent in ``agents`` goes through here."""
     path = Path(path)
     if not path.exists():
         raise ConfigError(f"{path}: no such file or folder")
-    if rllib.is_checkpoint(path):
-        return _rllib_policy(path)
-    if path.is_dir():
+    if path.is_dir() and not is_rllib_checkpoint(path):
         model_path = path / MODEL_FILE
         if not model_path.is_file():
             newest = latest_checkpoint(path)
@@ -248,7 +252,7 @@ def load_policy(path: str | os.PathLike[str]) -> Policy:
                 raise ConfigError(f"{path}: no {MODEL_FILE} and no checkpoint in this folder")
             model_path = newest[1]
         path = model_path
-    return _sb3_policy(path)
+    return _rllib_policy(path) if is_rllib_checkpoint(path) else _sb3_policy(path)
 
 
 def read_agent_entry(model_path: Path) -> dict[str, Any] | None:
@@ -298,7 +302,7 @@ def _sb3_statistics(model_path: Path, entry: dict[str, Any] | None) -> ObsNormal
     if pickled is None:
         raise ConfigError(
             f"{model_path}: its VecNormalize statistics are missing: the zip carries none and "
-            f"{model_path.stem}_vecnormalize.pkl is not beside it"
+            f"{model_path.stem}_{STATS_FILE} is not beside it"
         )
     with open(pickled, "rb") as file:
         venv = pickle.load(file)
@@ -312,9 +316,9 @@ def _rllib_policy(path: Path) -> Policy:
     from ray.rllib.core.columns import Columns
     from ray.rllib.core.rl_module.rl_module import RLModule
 
-    checkpoint, config = rllib.load_checkpoint(path)
+    checkpoint, config = rllib_checkpoint(path)
     torch.set_num_threads(config.torch_threads)
-    module = RLModule.from_checkpoint(str(checkpoint.joinpath(*rllib.MODULE_PATH).resolve()))
+    module = RLModule.from_checkpoint(str(checkpoint.joinpath(*MODULE_PATH).resolve()))
     module.eval()
     if not isinstance(module.action_space, spaces.Discrete):
         raise ConfigError(f"{path}: RLlib policies load for discrete actions only")
@@ -333,7 +337,7 @@ def _rllib_policy(path: Path) -> Policy:
 
 def _rllib_filter(checkpoint: Path, module: Any, config: RllibConfig) -> ObsNormalization | None:
     """The running mean and std a checkpoint's env runners normalised with, frozen."""
-    filter_path = checkpoint.joinpath(*rllib.FILTER_PATH)
+    filter_path = checkpoint.joinpath(*FILTER_PATH)
     if not filter_path.is_dir():
         if config.env.normalize:
             raise ConfigError(f"{checkpoint}: its observation filter (MeanStdFilter) is missing")

@@ -28,7 +28,6 @@ import dataclasses
 import json
 import os
 import shutil
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -36,22 +35,29 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.common import (
+from agents.cli import run_training, training_parser
+from agents.config import ConfigError, RllibConfig, save_config
+from agents.runs import (
     CHECKPOINTS,
     CONFIG_FILE,
+    PROGRESS_FILE,
     ProgressBar,
     StopRequest,
     TrainingInterrupted,
-    extend_run,
+    latest_checkpoint,
+    next_multiple,
     start_run,
 )
-from agents.config import ConfigError, RllibConfig, load_config, save_config
+
+# The layout of RLlib checkpoints is in agents.runs; these are the names agents.rllib gave it.
+from agents.runs import FILTER_PATH as FILTER_PATH
+from agents.runs import RLLIB_CHECKPOINT_FILE as RLLIB_CHECKPOINT_FILE
+from agents.runs import RLLIB_MODEL_DIR as MODEL_DIR
+from agents.runs import checkpoints_of as checkpoints_of
+from agents.runs import is_rllib_checkpoint as is_checkpoint  # noqa: F401
+from agents.runs import rllib_checkpoint as load_checkpoint  # noqa: F401
 
 ENV_NAME = "pinball"  # the env's name in ray.tune's registry
-MODEL_DIR = "model"  # the final checkpoint in a run folder
-RLLIB_CHECKPOINT_FILE = "rllib_checkpoint.json"  # marks an RLlib checkpoint folder
-MODULE_PATH = ("learner_group", "learner", "rl_module", "default_policy")
-FILTER_PATH = ("env_runner", "env_to_module_connector", "MeanStdFilter")
 # The game metrics the env runners log (under env_runners/ in a result).
 SCORE, TRUNCATED, FRAMES = "game_score", "game_truncated", "game_frames_lifetime"
 
@@ -168,16 +174,6 @@ def build(config: RllibConfig, local: bool = False) -> Any:
         raise ConfigError(f"RLlib rejects the config: {error}") from None
 
 
-def checkpoints_of(run: Path) -> list[tuple[int, Path]]:
-    """``(steps, folder)`` of each complete checkpoint of a run, oldest first."""
-    found = []
-    for path in (run / CHECKPOINTS).glob("step_*"):
-        steps = path.name.removeprefix("step_")
-        if steps.isdigit() and (path / RLLIB_CHECKPOINT_FILE).is_file():
-            found.append((int(steps), path))
-    return sorted(found)
-
-
 def save_checkpoint(algo: Any, path: Path, config: RllibConfig) -> None:
     """Save the algorithm into the folder ``path``, with the run's ``config.yaml`` (so that it
     loads copied alone): written beside it, then renamed into place, so a run killed mid-write
@@ -244,7 +240,7 @@ class ProgressLog:
     def __init__(self, run: Path) -> None:
         from torch.utils.tensorboard import SummaryWriter
 
-        self.path = run / "progress.csv"
+        self.path = run / PROGRESS_FILE
         self.writer = SummaryWriter(str(run))
         self.fields: list[str] | None = None
         if self.path.is_file():
@@ -275,7 +271,7 @@ def train(
 ) -> Path:  # fmt: skip
     """Train (or go on training) in ``run``; returns the final checkpoint's folder. Ray must be
     initialised (``init_ray``); ``local``: a Ray instance of this machine only."""
-    checkpoint = checkpoints_of(run)[-1] if resume and checkpoints_of(run) else None
+    checkpoint = latest_checkpoint(run) if resume else None
     if resume and checkpoint is None:
         raise ConfigError(f"{run}: no checkpoint to resume from")
     algo = build(config, local)
@@ -284,10 +280,10 @@ def train(
         algo.restore_from_path(str(checkpoint[1].resolve()))
     steps = checkpoint[0] if checkpoint else 0
     if checkpoint is not None:
-        forget_progress_after(run / "progress.csv", steps)
+        forget_progress_after(run / PROGRESS_FILE, steps)
     log = ProgressLog(run)
     every = config.checkpoint_every
-    next_checkpoint = (steps // every + 1) * every if every else 0
+    next_checkpoint = next_multiple(steps, every)
     began = time.monotonic()
     bar = ProgressBar(config, steps, began + 60.0 * config.max_minutes, progress_bar)
     try:
@@ -302,7 +298,7 @@ def train(
                 log.write(row)
                 if next_checkpoint and steps >= next_checkpoint:
                     save_checkpoint(algo, run / CHECKPOINTS / f"step_{steps}", config)
-                    next_checkpoint = (steps // every + 1) * every
+                    next_checkpoint = next_multiple(steps, every)
                 if config.max_minutes and time.monotonic() - began > 60.0 * config.max_minutes:
                     break
             # The last checkpoint is the final model, so a resume goes on from it.
@@ -389,81 +385,41 @@ def scaling(config: RllibConfig, runners: list[int], iterations: int, out: Path)
     return rows
 
 
-def is_checkpoint(path: Path) -> bool:
-    """Whether ``path`` is an RLlib run folder (with its final model) or checkpoint folder."""
-    return (path / RLLIB_CHECKPOINT_FILE).is_file() or (
-        path / MODEL_DIR / RLLIB_CHECKPOINT_FILE
-    ).is_file()
+def check_options(args: argparse.Namespace) -> None:
+    """The options of ``--scaling`` (a measurement of a config: no resume)."""
+    if args.resume is not None and args.scaling:
+        raise ConfigError("--resume goes on with the run's own config: no --config")
+    if args.iterations < 1:
+        raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
+    if args.scaling and min(args.scaling) < 0:
+        raise ConfigError(f"--scaling: env runner counts must be >= 0, got {args.scaling}")
 
 
-def load_checkpoint(path: Path) -> tuple[Path, RllibConfig]:
-    """The checkpoint folder and the run's config of an RLlib run folder or checkpoint."""
-    checkpoint = path if (path / RLLIB_CHECKPOINT_FILE).is_file() else path / MODEL_DIR
-    folders = (checkpoint, checkpoint.parent, checkpoint.parent.parent)  # its own config first
-    run = next((p for p in folders if (p / CONFIG_FILE).is_file()), None)
-    if run is None:
-        raise ConfigError(
-            f"{path}: no {CONFIG_FILE} in the checkpoint or its run folder: cannot rebuild its env"
-        )
-    return checkpoint, load_config(run / CONFIG_FILE, kind=RllibConfig)
+def prepare(config: RllibConfig, args: argparse.Namespace) -> list[dict] | None:
+    """Start Ray or join the cluster; with ``--scaling``, the measurement, and no training."""
+    init_ray(args.address)
+    if args.scaling:
+        return scaling(config, args.scaling, args.iterations, args.out)
+    return None
 
 
 def main(argv: list[str] | None = None) -> Path | list[dict]:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--config", type=Path, help="a YAML config (configs/agents/rllib_*.yaml)")
-    parser.add_argument("overrides", nargs="*", help="key=value settings over the config")
-    parser.add_argument("--resume", type=Path, metavar="RUN", help="a run folder to go on with")
+    parser = training_parser(
+        __doc__.split("\n")[0], "configs/agents/rllib_*.yaml", "key=value settings over the config"
+    )
     parser.add_argument("--address", help="a Ray cluster to join (auto, or HOST:PORT)")
-    parser.add_argument("--runs", type=Path, default=Path("runs"), help="where run folders go")
-    parser.add_argument("--report", action="store_true", help="evaluate and report at the end")
-    parser.add_argument("--episodes", type=int, default=100, help="games for --report")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--scaling", type=int, nargs="+", metavar="RUNNERS",
                         help="measure sampled steps/s with these env runner counts")  # fmt: skip
     parser.add_argument("--iterations", type=int, default=3, help="iterations per --scaling row")
     parser.add_argument("--out", type=Path, default=Path("runs/scaling.json"),
                         help="where --scaling writes its JSON")  # fmt: skip
-    args = parser.parse_args(argv)
-    try:
-        if args.resume is not None:
-            if args.config is not None or args.scaling:
-                raise ConfigError("--resume goes on with the run's own config: no --config")
-            run = args.resume
-            if (run / CONFIG_FILE).is_file() and not checkpoints_of(run):
-                raise ConfigError(f"{run}: no checkpoint to resume from")
-            command = sys.argv if argv is None else argv
-            config = extend_run(run, args.overrides, RllibConfig, command)
-        elif args.config is None:
-            raise ConfigError("give --config FILE (or --resume RUN)")
-        else:
-            config = load_config(args.config, args.overrides, kind=RllibConfig)
-        if args.iterations < 1:
-            raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
-        if args.scaling and min(args.scaling) < 0:
-            raise ConfigError(f"--scaling: env runner counts must be >= 0, got {args.scaling}")
-        init_ray(args.address)
-        if args.scaling:
-            return scaling(config, args.scaling, args.iterations, args.out)
-        if args.resume is None:
-            run = start(config, args.runs, sys.argv if argv is None else argv)
-        print(f"run folder: {run}")
-        try:
-            resume, progress = args.resume is not None, not args.no_progress
-            model = train(config, run, resume, progress, local=args.address is None)
-        except ConfigError:
-            if args.resume is None:  # nothing was trained: leave no run folder behind
-                shutil.rmtree(run)
-            raise
-    except ConfigError as error:
-        parser.exit(2, f"error: {error}\n")
-    except TrainingInterrupted as stopped:
-        parser.exit(stopped.exit_code, f"{stopped}\n")
-    print(f"model: {model}")
-    if args.report:
-        from agents.evaluate import report
 
-        report(run, episodes=args.episodes)
-    return model
+    def train_in(
+        config: RllibConfig, run: Path, resume: bool, progress: bool, args: argparse.Namespace
+    ) -> Path:
+        return train(config, run, resume, progress, local=args.address is None)
+
+    return run_training(parser, argv, RllibConfig, start, train_in, check_options, prepare)
 
 
 if __name__ == "__main__":

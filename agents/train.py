@@ -18,52 +18,47 @@ model plays the validation games (``validate_seed`` on) every that many steps an
 the scores go to ``validation.csv``, the best model so far to ``best_model.zip``, and the best
 of all becomes ``model.zip`` (the last one stays in ``checkpoints/``). ``--report`` then
 evaluates the model against the random and heuristic baselines and writes the report into the
-run folder (see ``agents.evaluate``).
+run folder (see ``agents.report``).
 
 Models are pickles inside zips: load only models you trust.
 """
 
-import argparse
 import collections
 import copy
 import csv
 import io
-import shutil
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from agents.common import (
+from agents.cli import run_training, training_parser
+from agents.config import ConfigError, TrainConfig, algorithm_class, sb3_hyperparams
+from agents.envs import FrameCounter, make_env
+from agents.imitation import imitate
+from agents.rollouts import model_policy, rollouts, summarize
+from agents.runs import (
     CHECKPOINTS,
     MODEL_FILE,
     STATS_FILE,
-    FrameCounter,
+    VALIDATION_FILE,
     ProgressBar,
     StopRequest,
     TrainingInterrupted,
     atomic_write,
-    extend_run,
+    best_validation,
+    keep_progress,
     latest_checkpoint,
-    make_env,
+    next_multiple,
     save_model,
     start_run,
     stats_for,
+    validation_rows,
 )
-from agents.config import (
-    ConfigError,
-    TrainConfig,
-    algorithm_class,
-    check_evaluation_seeds,
-    load_config,
-    sb3_hyperparams,
-)
-from agents.imitation import imitate
 
-VALIDATION_FILE = "validation.csv"
 BEST_MODEL = "best_model"
+MODEL_NAME = Path(MODEL_FILE).stem  # model.zip, model_vecnormalize.pkl
 
 
 class Validation:
@@ -79,24 +74,15 @@ class Validation:
     def __init__(self, config: TrainConfig, run: Path) -> None:
         self.config, self.run = config, run
         self.venv: Any = None
-        self.rows: list[dict[str, Any]] = []
-        if (run / VALIDATION_FILE).is_file():
-            with open(run / VALIDATION_FILE) as file:
-                self.rows = [
-                    {key: (int if key in ("steps", "frames") else float)(value)
-                     for key, value in row.items()}
-                    for row in csv.DictReader(file)
-                ]  # fmt: skip
+        self.rows = validation_rows(run)  # a resumed run's so far
 
     @property
     def best(self) -> dict[str, Any] | None:
         """The row of the best validation so far (the earliest of equals), or None."""
-        return max(self.rows, key=lambda row: row["score_mean"], default=None)
+        return best_validation(self.rows)
 
     def __call__(self, model: Any, frames: int) -> dict[str, float]:
         """Validate ``model`` (``frames`` played in training so far); returns its row."""
-        from agents.evaluate import model_policy, rollouts, summarize
-
         games = self.config.validation_seeds
         if self.venv is None:
             self.venv = make_env(self.config, num_envs=len(games), seed=games.start)
@@ -152,18 +138,18 @@ def make_callback(
     starts) or when ``stop`` is asked, and a progress bar (see :class:`ProgressBar`)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
+    validate_every = config.validate_every if validation else 0
+
     class TrainingCallback(BaseCallback):
         def __init__(self) -> None:
             super().__init__()
             self.scores: collections.deque = collections.deque(maxlen=100)
             self.truncated: collections.deque = collections.deque(maxlen=100)
-            self.next_checkpoint = 0
-            self.next_validation = 0
             self.counter = FrameCounter(config.env.num_envs, frames)
 
-        def _on_training_start(self) -> None:
-            self.next_checkpoint = self._next(config.checkpoint_every)
-            self.next_validation = self._next(config.validate_every if validation else 0)
+        def _on_training_start(self) -> None:  # the next checkpoint and validation (0: none)
+            self.next_checkpoint = next_multiple(self.num_timesteps, config.checkpoint_every)
+            self.next_validation = next_multiple(self.num_timesteps, validate_every)
             self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
             self.bar = ProgressBar(config, self.num_timesteps, self.deadline, progress_bar)
 
@@ -184,13 +170,7 @@ def make_callback(
                 self.logger.record("validation/score_mean", row["score_mean"])
                 self.next_validation += config.validate_every
             self.bar.update(self.num_timesteps)
-            if stop:
-                return False
-            return not config.max_minutes or time.monotonic() < self.deadline
-
-        def _next(self, every: int) -> int:
-            """The first multiple of ``every`` past the steps done (0: never)."""
-            return (self.num_timesteps // every + 1) * every if every else 0
+            return not stop and (not config.max_minutes or time.monotonic() < self.deadline)
 
         def _on_rollout_end(self) -> None:
             self.logger.record("time/frames", self.counter.frames)
@@ -200,27 +180,6 @@ def make_callback(
                 self.bar.score(float(np.mean(self.scores)))
 
     return TrainingCallback()
-
-
-def keep_progress(run: Path) -> int:
-    """Move a run's ``progress.csv`` aside as ``progress_K.csv`` before a resume writes a new
-    one (stable-baselines3 overwrites it); the learning curve reads them all. Returns the last
-    ``time/frames`` logged, for the count to go on from."""
-    progress = run / "progress.csv"
-    if progress.exists():
-        progress.rename(run / f"progress_{len(list(run.glob('progress_*.csv')))}.csv")
-    frames = [row.get("time/frames") for row in progress_rows(run)]
-    return max((int(float(f)) for f in frames if f), default=0)
-
-
-def progress_rows(run: Path) -> list[dict[str, str]]:
-    """The rows of every progress file of a run (progress_K.csv: before each resume), in the
-    order of the env steps."""
-    rows = []
-    for path in sorted(run.glob("progress*.csv")):
-        with open(path) as file:
-            rows += list(csv.DictReader(file))
-    return sorted(rows, key=lambda row: float(row["time/total_timesteps"]))
 
 
 def set_threads(config: TrainConfig) -> None:
@@ -248,47 +207,13 @@ def _train(
 
     started = time.monotonic()
     set_threads(config)
-    algorithm = algorithm_class(config.algo)
     checkpoint = latest_checkpoint(run) if resume else None
     if resume and checkpoint is None:
         raise ConfigError(f"{run}: no checkpoint to resume from")
-    stats = stats_for(checkpoint[1]) if checkpoint else None
-    if checkpoint and config.env.normalize and stats is None:
-        raise ConfigError(f"{checkpoint[1]}: its VecNormalize statistics are missing")
-    venv = make_env(config, stats=stats)
-    if checkpoint is not None and hasattr(venv, "obs_rms"):
-        venv.training = True  # the loaded statistics go on learning
-        venv.norm_reward = True
-    if checkpoint is not None:
-        steps, path = checkpoint
-        print(f"resuming {run} from {path.name} ({steps} steps)")
-        model = algorithm.load(path, env=venv, device=config.device)
-        if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
-            model.learning_starts += model.num_timesteps
-        frames = keep_progress(run)
-    else:
-        frames = 0
-        try:
-            model = algorithm(
-                config.policy, venv, seed=config.seed, device=config.device, verbose=0,
-                **sb3_hyperparams(config),
-            )  # fmt: skip
-        except (TypeError, ValueError, AssertionError) as error:  # SB3 checks with asserts too
-            venv.close()
-            raise ConfigError(f"hyperparams: {config.algo.upper()} rejects them: {error}") from None
+    venv, model, frames = _model(config, run, checkpoint)
     model.set_logger(configure(str(run), ["csv", "tensorboard"]))
     if config.imitation_steps and checkpoint is None:
-        fit = imitate(
-            model, venv, config.imitation_steps, config.imitation_epochs, config.seed, stop
-        )  # fmt: skip
-        print(
-            f"warm start: the heuristic played {fit['steps']} steps ({fit['frames']} frames); "
-            f"the policy now takes its action {fit['accuracy']:.1%} of the time "
-            f"({fit['seconds']:.0f} s){' (cut short)' if stop else ''}"
-        )
-        for key in ("steps", "frames", "accuracy", "value_loss", "seconds"):
-            model.logger.record(f"imitation/{key}", fit[key])
-        frames = fit["frames"]
+        frames = warm_start(model, venv, config, stop)
     validation = Validation(config, run) if config.validate_every else None
     callback = make_callback(config, run, frames, started, validation, stop, progress_bar)
     left = config.total_timesteps - model.num_timesteps
@@ -304,7 +229,7 @@ def _train(
         raise TrainingInterrupted(
             run, run / CHECKPOINTS / f"{last}.zip", model.num_timesteps, stop, "agents.train"
         )
-    save_model(model, run, Path(MODEL_FILE).stem, config)
+    save_model(model, run, MODEL_NAME, config)
     if validation is not None:
         if not validation.rows or validation.rows[-1]["steps"] != model.num_timesteps:
             validation(model, callback.counter.frames)
@@ -314,11 +239,56 @@ def _train(
     return run / MODEL_FILE
 
 
+def _model(
+    config: TrainConfig, run: Path, checkpoint: tuple[int, Path] | None
+) -> tuple[Any, Any, int]:
+    """The training env, the model (new, or loaded from ``checkpoint`` with its statistics)
+    and the frames played so far (a resume's, from its progress files)."""
+    algorithm = algorithm_class(config.algo)
+    stats = stats_for(checkpoint[1]) if checkpoint else None
+    if checkpoint and config.env.normalize and stats is None:
+        raise ConfigError(f"{checkpoint[1]}: its VecNormalize statistics are missing")
+    venv = make_env(config, stats=stats)
+    if checkpoint is None:
+        try:
+            model = algorithm(
+                config.policy, venv, seed=config.seed, device=config.device, verbose=0,
+                **sb3_hyperparams(config),
+            )  # fmt: skip
+        except (TypeError, ValueError, AssertionError) as error:  # SB3 checks with asserts too
+            venv.close()
+            raise ConfigError(f"hyperparams: {config.algo.upper()} rejects them: {error}") from None
+        return venv, model, 0
+    if hasattr(venv, "obs_rms"):
+        venv.training = True  # the loaded statistics go on learning
+        venv.norm_reward = True
+    steps, path = checkpoint
+    print(f"resuming {run} from {path.name} ({steps} steps)")
+    model = algorithm.load(path, env=venv, device=config.device)
+    if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
+        model.learning_starts += model.num_timesteps
+    return venv, model, keep_progress(run)
+
+
+def warm_start(model: Any, venv: Any, config: TrainConfig, stop: StopRequest) -> int:
+    """The heuristic's games and the fit to them (``agents.imitation``), logged under
+    ``imitation/``; returns the frames they played."""
+    fit = imitate(model, venv, config.imitation_steps, config.imitation_epochs, config.seed, stop)
+    print(
+        f"warm start: the heuristic played {fit['steps']} steps ({fit['frames']} frames); "
+        f"the policy now takes its action {fit['accuracy']:.1%} of the time "
+        f"({fit['seconds']:.0f} s){' (cut short)' if stop else ''}"
+    )
+    for key in ("steps", "frames", "accuracy", "value_loss", "seconds"):
+        model.logger.record(f"imitation/{key}", fit[key])
+    return fit["frames"]
+
+
 def keep_best(run: Path, best: dict[str, Any]) -> None:
     """Make the best validated model (``best_model.zip``) the run's ``model.zip``."""
     for name in (f"{BEST_MODEL}_{STATS_FILE}", f"{BEST_MODEL}.zip"):  # as save_model does
         if (run / name).exists():
-            target = run / name.replace(BEST_MODEL, Path(MODEL_FILE).stem)
+            target = run / name.replace(BEST_MODEL, MODEL_NAME)
             atomic_write(target, lambda file, source=run / name: file.write(source.read_bytes()))
     print(
         f"model: the best on the validation games, at {int(best['steps'])} steps "
@@ -327,50 +297,14 @@ def keep_best(run: Path, best: dict[str, Any]) -> None:
 
 
 def main(argv: list[str] | None = None) -> Path:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--config", type=Path, help="a YAML config (configs/agents/*.yaml)")
-    parser.add_argument(
-        "overrides", nargs="*", help="key=value settings over the config (--resume: extensions)"
-    )
-    parser.add_argument("--resume", type=Path, metavar="RUN", help="a run folder to go on with")
-    parser.add_argument("--runs", type=Path, default=Path("runs"), help="where run folders go")
-    parser.add_argument("--report", action="store_true", help="evaluate and report at the end")
-    parser.add_argument("--episodes", type=int, default=100, help="games for --report")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    args = parser.parse_args(argv)
-    try:
-        if args.resume is not None:
-            if args.config is not None:
-                raise ConfigError("--resume goes on with the run's own config: no --config")
-            run = args.resume
-            config = extend_run(
-                run, args.overrides, TrainConfig, sys.argv if argv is None else argv
-            )
-        elif args.config is None:
-            raise ConfigError("give --config FILE (or --resume RUN)")
-        else:
-            config = load_config(args.config, args.overrides)
-        if args.report:  # before training: the report's games must be new to the model
-            check_evaluation_seeds(config, config.eval_seed, args.episodes)
-        if args.resume is None:
-            run = start(config, args.runs, sys.argv if argv is None else argv)
-        print(f"run folder: {run}")
-        try:
-            model = train(config, run, args.resume is not None, not args.no_progress)
-        except ConfigError:
-            if args.resume is None:  # nothing was trained: leave no run folder behind
-                shutil.rmtree(run)
-            raise
-    except ConfigError as error:
-        parser.exit(2, f"error: {error}\n")
-    except TrainingInterrupted as stopped:
-        parser.exit(stopped.exit_code, f"{stopped}\n")
-    print(f"model: {model}")
-    if args.report:
-        from agents.evaluate import report
-
-        report(run, episodes=args.episodes)
-    return model
+    parser = training_parser(
+        __doc__.split("\n")[0], "configs/agents/*.yaml",
+        "key=value settings over the config (--resume: extensions)",
+    )  # fmt: skip
+    return run_training(
+        parser, argv, TrainConfig, start,
+        lambda config, run, resume, progress, args: train(config, run, resume, progress),
+    )  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -12,10 +12,11 @@ import pytest
 import yaml
 
 from agents import evaluate, train
-from agents.common import atomic_write, latest_checkpoint, make_env, save_model
 from agents.config import ConfigError, load_config, sb3_hyperparams
+from agents.envs import make_env
 from agents.imitation import discounted_returns, imitate, teacher_games
 from agents.policy import load_policy
+from agents.runs import atomic_write, latest_checkpoint, save_model
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIGS_DIR = ROOT / "configs" / "agents"
@@ -119,7 +120,7 @@ def strip_agent_entry(model: Path) -> None:
     """Rewrite a model zip without the config and statistics it carries (an older zip)."""
     import zipfile
 
-    from agents.common import AGENT_ENTRY
+    from agents.runs import AGENT_ENTRY
 
     with zipfile.ZipFile(model) as archive:
         entries = {name: archive.read(name) for name in archive.namelist() if name != AGENT_ENTRY}
@@ -147,7 +148,7 @@ def test_a_checkpoint_write_killed_midway_leaves_the_last_one_whole(tmp_path):
 
 def test_save_model_writes_the_normalisation_statistics_first(tmp_path, monkeypatch):
     order = []
-    monkeypatch.setattr("agents.common.atomic_write", lambda path, write: order.append(path.name))
+    monkeypatch.setattr("agents.runs.atomic_write", lambda path, write: order.append(path.name))
 
     class Model:
         def get_env(self):
@@ -461,7 +462,7 @@ def test_a_signal_saves_a_checkpoint_and_the_run_resumes_extended(
 
     from stable_baselines3 import PPO
 
-    from agents.common import AGENT_ENTRY
+    from agents.runs import AGENT_ENTRY
 
     runs = tmp_path / "runs"
     budget = ["total_timesteps=100000000", "checkpoint_every=0", *TINY["ppo"], "env.num_envs=2"]
@@ -506,10 +507,10 @@ def test_a_resume_refuses_keys_that_would_change_what_was_learned(tmp_path, caps
 
 
 def test_the_progress_bar_counts_down_to_max_minutes(monkeypatch):
-    from agents.common import ProgressBar
+    from agents.runs import ProgressBar
 
     clock = [1000.0]
-    monkeypatch.setattr("agents.common.time.monotonic", lambda: clock[0])
+    monkeypatch.setattr("agents.runs.time.monotonic", lambda: clock[0])
     config = load_config(ROOT / "configs/agents/ppo.yaml", ["max_minutes=1"])
     bar = ProgressBar(config, 0, deadline=1060.0, show=True)
     clock[0] = 1010.0

@@ -47,3 +47,42 @@ def test_importing_the_package_loads_no_agent_library_and_no_tool():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+AGENTS = Path(__file__).resolve().parent.parent / "agents"
+# The commands on top of agents/: nothing below them imports them.
+AGENT_COMMANDS = {"train", "rllib", "evaluate", "generalization"}
+
+
+def agent_imports(path: Path) -> set[str]:
+    """The modules of ``agents`` that ``path`` imports, at module level or inside a function."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            assert node.level == 0, f"{path.name}: a relative import hides where it points"
+            names = [node.module]
+            if node.module == "agents":  # from agents import train: the module agents.train
+                names = [f"agents.{alias.name}" for alias in node.names]
+        else:
+            continue
+        found.update(name.split(".")[1] for name in names if name.startswith("agents."))
+    return found
+
+
+def test_the_agents_modules_import_one_way():
+    graph = {path.stem: agent_imports(path) for path in AGENTS.glob("*.py")}
+    assert {"train", "rllib", "evaluate", "generalization", "policy", "config"} <= set(graph)
+    for module, imports in graph.items():
+        assert imports <= set(graph), f"agents.{module} imports a module agents lacks: {imports}"
+        if module not in AGENT_COMMANDS:
+            below = imports & AGENT_COMMANDS
+            assert not below, f"agents.{module} imports the command(s) {sorted(below)} above it"
+    # No cycle: take off, again and again, the modules that import none of those left.
+    left = dict(graph)
+    while left:
+        leaves = [module for module, imports in left.items() if not imports & set(left)]
+        assert leaves, f"an import cycle among agents.{{{', '.join(sorted(left))}}}"
+        for module in leaves:
+            del left[module]

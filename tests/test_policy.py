@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from agents import evaluate
-from agents.common import AGENT_ENTRY
 from agents.config import ConfigError
 from agents.policy import load_policy
+from agents.runs import AGENT_ENTRY
 from tests.test_agents import ROOT, strip_agent_entry, tiny_run
 
 EPISODES = 3

@@ -1,6 +1,18 @@
-"""What training and evaluation share: the env chain a config describes, run folders, and
-atomic writes."""
+"""Run folders and what they hold: names, ``meta.json``, resumes, atomic writes, checkpoints
+(stable-baselines3's zips and RLlib's folders) and the progress logged; and the stop on a signal
+and the progress bar of a training.
 
+A run folder::
+
+    config.yaml           the exact config (CONFIG_FILE)
+    meta.json             versions, the command, the start time, the resumes
+    progress.csv          the logged rows (progress_K.csv: before the K-th resume of an SB3 run)
+    validation.csv        the validation games' results (VALIDATION_FILE), best_model.zip
+    checkpoints/step_N.zip, step_N_vecnormalize.pkl   (SB3), or step_N/ (RLlib folders)
+    model.zip, model_vecnormalize.pkl                 (SB3), or model/ (RLlib)
+"""
+
+import csv
 import importlib
 import io
 import json
@@ -17,103 +29,24 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
-import numpy as np
-
-import pinball_env  # noqa: F401  (registers Pinball-v0)
 from agents.config import AnyConfig, ConfigError, RllibConfig, TrainConfig, load_config, save_config
-from pinball_env.heuristic import HeuristicPolicy
-from pinball_env.wrappers import SB3VecEnv
 
 CONFIG_FILE = "config.yaml"
 MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.pkl"
 CHECKPOINTS = "checkpoints"
-CHECKPOINT_NAME = re.compile(r"step_(\d+)\.zip$")
+PROGRESS_FILE = "progress.csv"
+VALIDATION_FILE = "validation.csv"
+# A checkpoint: step_N.zip (stable-baselines3) or the folder step_N (RLlib).
+CHECKPOINT_NAME = re.compile(r"step_(\d+)(\.zip)?")
 # The entry of a model zip that carries its config and observation statistics (agents.policy).
 AGENT_ENTRY = "pinball/agent.json"
-BASELINES = ("random", "heuristic")
-
-# A policy over a VecEnv: (observations, infos) -> actions.
-Policy = Callable[[np.ndarray, list[dict[str, Any]]], np.ndarray]
-
-
-def make_env(
-    config: TrainConfig,
-    num_envs: int | None = None,
-    seed: int | None = None,
-    stats: Path | None = None,
-    render: bool = False,
-    frozen: Callable[[np.ndarray], np.ndarray] | None = None,
-) -> Any:
-    """The stable-baselines3 VecEnv a config trains on: the native vector env (``num_envs``
-    games, env i first reset with ``seed + i``), frame stacking, and ``VecNormalize``.
-
-    With ``stats`` (a saved ``VecNormalize``), its statistics are loaded and frozen, and rewards
-    are left raw; with ``frozen`` (a policy's ``ObsNormalization``), observations are
-    normalised by it instead: either is the evaluation's view of the same env.
-    """
-    from stable_baselines3.common.vec_env import VecFrameStack, VecNormalize, VecTransposeImage
-
-    kwargs = config.env.make_kwargs
-    venv = SB3VecEnv(
-        gym.make_vec(
-            config.env.id, num_envs=num_envs or config.env.num_envs,
-            vectorization_mode="vector_entry_point", num_threads=config.env_threads,
-            render_mode="rgb_array" if render else None, **kwargs,
-        )
-    )  # fmt: skip
-    venv.seed(config.seed if seed is None else seed)
-    image = kwargs.get("obs_type", "state") != "state"
-    if config.env.frame_stack > 1:
-        venv = VecFrameStack(venv, config.env.frame_stack)
-    if image:
-        venv = VecTransposeImage(venv)  # channels first, as SB3's CNN wants
-    if frozen is not None:
-        venv = frozen_observations(venv, frozen)
-    elif config.env.normalize:
-        if stats is not None:
-            venv = VecNormalize.load(str(stats), venv)
-            venv.training = False
-            venv.norm_reward = False
-        else:
-            venv = VecNormalize(
-                venv, norm_obs=not image, gamma=config.hyperparams.get("gamma", 0.99)
-            )
-    return venv
-
-
-def frozen_observations(venv: Any, normalise: Callable[[np.ndarray], np.ndarray]) -> Any:
-    """``venv`` with its observations (and terminal observations) passed through
-    ``normalise``: a saved policy's frozen statistics, rewards left raw."""
-    from stable_baselines3.common.vec_env import VecEnvWrapper
-
-    class Frozen(VecEnvWrapper):
-        def reset(self) -> np.ndarray:
-            return normalise(self.venv.reset())
-
-        def step_wait(self) -> Any:
-            obs, rewards, dones, infos = self.venv.step_wait()
-            for info in infos:
-                if "terminal_observation" in info:
-                    info["terminal_observation"] = normalise(info["terminal_observation"])
-            return normalise(obs), rewards, dones, infos
-
-    return Frozen(venv)
-
-
-class FrameCounter:
-    """The frames played by all envs of a VecEnv, counted from each step's infos (a step's
-    frames vary with the frame skip, ``skip_above`` and the end of a game)."""
-
-    def __init__(self, num_envs: int, frames: int = 0) -> None:
-        self.frames = frames
-        self.game_frames = np.zeros(num_envs, dtype=np.int64)  # of each env's game, last step
-
-    def update(self, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
-        for env, (done, info) in enumerate(zip(dones, infos, strict=True)):
-            self.frames += int(info["frames"] - self.game_frames[env])
-            self.game_frames[env] = 0 if done else info["frames"]
+# RLlib's layout: the final checkpoint of a run folder, the file that marks a checkpoint folder,
+# and where in one the RL module and the observation filter are.
+RLLIB_MODEL_DIR = "model"
+RLLIB_CHECKPOINT_FILE = "rllib_checkpoint.json"
+MODULE_PATH = ("learner_group", "learner", "rl_module", "default_policy")
+FILTER_PATH = ("env_runner", "env_to_module_connector", "MeanStdFilter")
 
 
 class StopRequest:
@@ -202,28 +135,6 @@ class TrainingInterrupted(Exception):
             f"{(stop.signal or signal.SIGINT).name}: stopped at {steps:,} steps; checkpoint "
             f"{checkpoint}\nresume with: python -m {module} --resume {run}"
         )
-
-
-def baseline_policy(name: str, venv: Any, seed: int) -> Policy:
-    """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
-    n = venv.num_envs
-    if name == "random":
-        rng = np.random.default_rng(seed)
-        space = venv.action_space
-        return lambda obs, infos: rng.integers(0, space.n, size=n)
-    world = venv.get_attr("game")[0].world
-    players: dict[int, tuple[Any, HeuristicPolicy]] = {}  # env -> (its table, its player)
-
-    def heuristic(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
-        actions = np.empty(n, dtype=np.int64)
-        for env, info in enumerate(infos):
-            table = world.table_of(env)  # generated tables change from game to game
-            if env not in players or players[env][0] is not table:
-                players[env] = (table, HeuristicPolicy(table))
-            actions[env] = players[env][1](info)
-        return actions
-
-    return heuristic
 
 
 def run_name(config: AnyConfig, when: str) -> str:
@@ -330,17 +241,88 @@ def save_model(model: Any, folder: Path, name: str, config: AnyConfig) -> None:
     atomic_write(folder / f"{name}.zip", lambda file: file.write(buffer.getvalue()))
 
 
-def latest_checkpoint(run: Path) -> tuple[int, Path] | None:
-    """``(steps, path)`` of the newest complete checkpoint of a run, or None."""
-    found = []
-    for path in (run / CHECKPOINTS).glob("step_*.zip"):
-        match = CHECKPOINT_NAME.search(path.name)
-        if match:
-            found.append((int(match.group(1)), path))
-    return max(found) if found else None
-
-
 def stats_for(model_path: Path) -> Path | None:
     """The VecNormalize statistics saved beside a model, if any."""
     stats = model_path.with_name(f"{model_path.stem}_{STATS_FILE}")
     return stats if stats.exists() else None
+
+
+def checkpoints_of(run: Path) -> list[tuple[int, Path]]:
+    """``(steps, path)`` of each complete checkpoint of a run, oldest first: the
+    ``step_N.zip`` of stable-baselines3, the ``step_N`` folders of RLlib (with their
+    ``rllib_checkpoint.json``). Half-written ones (hidden temporary names) are not listed."""
+    found = []
+    for path in (run / CHECKPOINTS).glob("step_*"):
+        match = CHECKPOINT_NAME.fullmatch(path.name)
+        if match and (match.group(2) or (path / RLLIB_CHECKPOINT_FILE).is_file()):
+            found.append((int(match.group(1)), path))
+    return sorted(found)
+
+
+def latest_checkpoint(run: Path) -> tuple[int, Path] | None:
+    """``(steps, path)`` of the newest complete checkpoint of a run, or None."""
+    found = checkpoints_of(run)
+    return found[-1] if found else None
+
+
+def is_rllib_checkpoint(path: Path) -> bool:
+    """Whether ``path`` is an RLlib run folder (with its final model) or checkpoint folder."""
+    return (path / RLLIB_CHECKPOINT_FILE).is_file() or (
+        path / RLLIB_MODEL_DIR / RLLIB_CHECKPOINT_FILE
+    ).is_file()
+
+
+def rllib_checkpoint(path: Path) -> tuple[Path, RllibConfig]:
+    """The checkpoint folder and the run's config of an RLlib run folder or checkpoint."""
+    checkpoint = path if (path / RLLIB_CHECKPOINT_FILE).is_file() else path / RLLIB_MODEL_DIR
+    folders = (checkpoint, checkpoint.parent, checkpoint.parent.parent)  # its own config first
+    run = next((p for p in folders if (p / CONFIG_FILE).is_file()), None)
+    if run is None:
+        raise ConfigError(
+            f"{path}: no {CONFIG_FILE} in the checkpoint or its run folder: cannot rebuild its env"
+        )
+    return checkpoint, load_config(run / CONFIG_FILE, kind=RllibConfig)
+
+
+def progress_rows(run: Path) -> list[dict[str, str]]:
+    """The rows of every progress file of a run (progress_K.csv: before each resume), in the
+    order of the env steps."""
+    rows = []
+    for path in sorted(run.glob("progress*.csv")):
+        with open(path) as file:
+            rows += list(csv.DictReader(file))
+    return sorted(rows, key=lambda row: float(row["time/total_timesteps"]))
+
+
+def keep_progress(run: Path) -> int:
+    """Move a run's ``progress.csv`` aside as ``progress_K.csv`` before a resume writes a new
+    one (stable-baselines3 overwrites it); the learning curve reads them all. Returns the last
+    ``time/frames`` logged, for the count to go on from."""
+    progress = run / PROGRESS_FILE
+    if progress.exists():
+        progress.rename(run / f"progress_{len(list(run.glob('progress_*.csv')))}.csv")
+    frames = [row.get("time/frames") for row in progress_rows(run)]
+    return max((int(float(f)) for f in frames if f), default=0)
+
+
+def validation_rows(run: Path) -> list[dict[str, Any]]:
+    """The rows of a run's ``validation.csv`` (none without one): ``steps`` and ``frames`` as
+    ints, the scores as floats."""
+    if not (run / VALIDATION_FILE).is_file():
+        return []
+    with open(run / VALIDATION_FILE) as file:
+        return [
+            {key: (int if key in ("steps", "frames") else float)(value)
+             for key, value in row.items()}
+            for row in csv.DictReader(file)
+        ]  # fmt: skip
+
+
+def best_validation(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The row of the best validation (the earliest of equals), or None."""
+    return max(rows, key=lambda row: row["score_mean"], default=None)
+
+
+def next_multiple(steps: int, every: int) -> int:
+    """The first multiple of ``every`` past ``steps`` (0 when ``every`` is 0: never)."""
+    return (steps // every + 1) * every if every else 0

@@ -1,0 +1,172 @@
+"""Evaluations, reports and learning curves.
+
+``evaluate`` plays whole games with a trained agent or a baseline on fixed seeds (by default
+the config's ``eval_seed`` on, games training never played) and writes ``episodes.csv`` and
+``summary.json`` (see ``agents.evaluate``, its command line); ``report(run)`` evaluates a run's
+model and both baselines on the same games and writes ``report.json``, ``learning_curve.png``
+and ``game.gif`` into the run folder; ``plot_learning_curve`` draws a run's training games (its
+``progress*.csv``) and validation games (``validation.csv``) against the frames played.
+"""
+
+import csv
+import json
+from pathlib import Path
+from typing import Any
+
+from agents.config import (
+    AnyConfig,
+    ConfigError,
+    check_evaluation_seeds,
+    config_from_dict,
+    load_run_config,
+)
+from agents.rollouts import (
+    BASELINES,
+    Player,
+    baseline_player,
+    play_games,
+    summarize,
+    trained_player,
+)
+from agents.runs import best_validation, progress_rows, validation_rows
+from agents.watch import record_video, watch_games
+
+REPORT_FILE = "report.json"
+
+
+def evaluate(
+    policy: str | None = None,
+    model_path: Path | None = None,
+    table: str | None = None,
+    episodes: int = 100,
+    seed: int | None = None,
+    out: Path | None = None,
+    video: Path | None = None,
+    curve: bool = False,
+    like: AnyConfig | None = None,
+    watch: bool = False,
+) -> dict[str, Any]:
+    """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
+    returns the summary. A baseline plays on ``table``, or on the env (and layouts) of the
+    config ``like``. With ``watch``, the games are shown in a window instead (nothing is
+    written)."""
+    if (policy is None) == (model_path is None):
+        raise ConfigError("give a model or a policy (random or heuristic), not both")
+    if episodes < 1:
+        raise ConfigError(f"episodes must be >= 1, got {episodes}")
+    if policy is not None:
+        if policy in BASELINES and like is None:
+            like = config_from_dict({"env": {"kwargs": {"table": table} if table else {}}})
+        player = baseline_player(policy, like)
+        out = out or Path("evals") / policy
+    else:
+        player = trained_player(model_path)
+        out = out or (model_path if model_path.is_dir() else model_path.parent) / "eval"
+    first = player.config.eval_seed if seed is None else seed
+    if player.trained:
+        check_evaluation_seeds(player.config, first, episodes)
+    if watch:
+        return watch_games(player.config, player.normalization, player.policy, first, episodes)
+    rows = play_games(player, list(range(first, first + episodes)))
+    summary = {"policy": player.name, "seeds": [first, first + episodes - 1], **summarize(rows)}
+    write_results(out, rows, summary)
+    if video is not None:
+        record_video(player.config, player.normalization, player.policy, first, video)
+    if curve and model_path is not None and model_path.is_dir():
+        curve_with_baselines(model_path, player, first, episodes, out)
+    print(
+        f"{player.name}: score {summary['score_mean']:.0f} (95% CI "
+        f"{summary['score_ci95'][0]:.0f}-{summary['score_ci95'][1]:.0f}) over {episodes} games, "
+        f"mean length {summary['length_mean']:.0f} frames, {summary['truncated_share']:.0%} "
+        f"truncated -> {out}"
+    )
+    return summary
+
+
+def curve_with_baselines(run: Path, player: Player, first: int, episodes: int, out: Path) -> None:
+    """``OUT/learning_curve.png`` of a run, with the baselines of its report, or, without one,
+    the baselines played now on the same games (their results in ``OUT/random`` and
+    ``OUT/heuristic``)."""
+    baselines = baselines_for(run) or {
+        baseline: evaluate(
+            policy=baseline, episodes=episodes, seed=first, out=out / baseline, like=player.config
+        )["score_mean"]
+        for baseline in BASELINES
+    }  # fmt: skip
+    plot_learning_curve(run, out / "learning_curve.png", baselines)
+
+
+def write_results(out: Path, rows: list[dict], summary: dict[str, Any]) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "episodes.csv", "w", newline="") as file:
+        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+
+
+def baselines_for(run: Path) -> dict[str, float]:
+    """The baselines' mean scores from a run's report, when it has one."""
+    report = run / REPORT_FILE
+    if not report.is_file():
+        return {}
+    data = json.loads(report.read_text())
+    return {name: data[name]["score_mean"] for name in BASELINES if name in data}
+
+
+def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> None:
+    """The training games' mean score (``rollout/ep_score_mean``) against frames played, and
+    the validation games' (``validation.csv``) when the run has them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    config = load_run_config(run)
+    rows = [row for row in progress_rows(run) if row.get("rollout/ep_score_mean")]
+    if not rows:
+        print(f"no learning curve: {run} has no finished training games logged yet")
+        return
+    skip = config.env.frame_skip  # runs from before time/frames was logged: steps x skip
+    frames = [float(row.get("time/frames") or float(row["time/total_timesteps"]) * skip)
+              for row in rows]  # fmt: skip
+    scores = [float(row["rollout/ep_score_mean"]) for row in rows]
+    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
+    ax.plot(frames, scores, label=f"{config.algo.upper()} (training games, last 100)")
+    checks = validation_rows(run)
+    if checks:
+        ax.plot([row["frames"] for row in checks], [row["score_mean"] for row in checks], "o",
+                markersize=4, label=f"validation games ({config.validate_episodes})")  # fmt: skip
+        chosen = best_validation(checks)  # the run's model
+        ax.plot(chosen["frames"], chosen["score_mean"], "*", color="black", markersize=11,
+                label=f"the model (at {chosen['steps']:,} steps)")  # fmt: skip
+    for (name, score), style in zip(baselines.items(), ("--", ":"), strict=False):
+        ax.axhline(score, linestyle=style, color="grey", label=f"{name} (evaluation)")
+    ax.set_xlabel("frames played (1/60 s each)")
+    ax.set_ylabel("game score")
+    ax.set_title(f"{config.env.id} on {config.env.kwargs.get('table', 'classic')}")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out)
+    plt.close(fig)
+
+
+def report(run: Path, episodes: int = 100) -> dict[str, Any]:
+    """Evaluate a run's model and both baselines on the same seeds; write ``report.json``,
+    ``learning_curve.png`` and ``game.gif`` into the run folder."""
+    config = load_run_config(run)
+    results = {}
+    for name in BASELINES:
+        out = run / "eval" / name
+        results[name] = evaluate(
+            policy=name, episodes=episodes, seed=config.eval_seed, out=out, like=config
+        )
+    results["model"] = evaluate(
+        model_path=run, episodes=episodes, out=run / "eval" / "model", video=run / "game.gif"
+    )
+    (run / REPORT_FILE).write_text(json.dumps(results, indent=1))
+    plot_learning_curve(run, run / "learning_curve.png", baselines_for(run))
+    print(f"report: {run / REPORT_FILE}, {run / 'learning_curve.png'}, {run / 'game.gif'}")
+    return results
