@@ -24,10 +24,11 @@ from typing import Any
 import gymnasium as gym
 import yaml
 
-from pinball_env import MAX_EPISODE_STEPS
-from pinball_env.env import PinballEnv
 from pinball_env.extras import missing_message
-from pinball_env.procgen_env import PinballProcgenEnv
+from pinball_env.game import check_playable
+from pinball_env.options import MAX_EPISODE_STEPS, PinballOptions
+from pinball_env.procgen import load_any_table
+from pinball_env.table import Table
 
 ALGORITHMS = ("ppo", "a2c", "dqn")
 POLICIES = ("MlpPolicy", "CnnPolicy")
@@ -35,12 +36,9 @@ POLICIES = ("MlpPolicy", "CnnPolicy")
 # training config must not set (rendering, and the thread count, which `torch_threads` sets).
 VECTOR_ONLY_KWARGS = ("max_episode_steps",)
 FORBIDDEN_ENV_KWARGS = ("render_mode", "num_threads", "autoreset_mode")
-# The agents train on the native vector env of the pinball envs registered with these entry
-# points (Pinball-v0 and PinballProcgen-v0, or another id registered with one of them).
-PINBALL_ENVS = {
-    "pinball_env.env:PinballEnv": PinballEnv,
-    "pinball_env.procgen_env:PinballProcgenEnv": PinballProcgenEnv,
-}
+# The agents train on the native vector env of the pinball envs: ids registered with this entry
+# point (Pinball-v0, PinballProcgen-v0, or another id registered with it).
+PINBALL_ENTRY_POINT = "pinball_env.env:PinballEnv"
 
 
 class ConfigError(ValueError):
@@ -437,26 +435,28 @@ def _check_options(
 
 
 def _check_env(env: EnvConfig, fail: Callable[[str, str], None]) -> None:
-    """The env id, its options (each one the env takes, its own checks passed)."""
+    """The env id and its options (each one the env takes, its checks passed, the table
+    loadable and playable), checked without building an env."""
     try:
         spec = gym.spec(env.id) if isinstance(env.id, str) else None
     except gym.error.Error:
         spec = None
-    if spec is None or spec.entry_point not in PINBALL_ENVS:
+    if spec is None or spec.entry_point != PINBALL_ENTRY_POINT:
         fail("env.id", f"{env.id!r} is not a registered pinball environment")
-    env_class = PINBALL_ENVS[spec.entry_point]
     if not isinstance(env.kwargs, dict):
         fail("env.kwargs", f"must be a mapping of {env.id}'s options")
-    options = set(inspect.signature(env_class.__init__).parameters) - {"self"}
-    options |= set(VECTOR_ONLY_KWARGS)
+    options = set(PinballOptions.names()) - set(spec.kwargs)  # the id's own are fixed
     for key in env.kwargs:
-        if key in FORBIDDEN_ENV_KWARGS or key not in options:
+        if key in FORBIDDEN_ENV_KWARGS or key not in options | set(VECTOR_ONLY_KWARGS):
             fail(f"env.kwargs.{key}", f"not a training option of {env.id}")
     steps = env.kwargs.get("max_episode_steps", 1)
     if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
         fail("env.kwargs.max_episode_steps", f"must be an integer >= 1, got {steps!r}")
-    try:  # the env's own checks of its options (a table that cannot be loaded, say)
-        env_class(**{k: v for k, v in env.kwargs.items() if k not in VECTOR_ONLY_KWARGS})
+    kwargs = {k: v for k, v in env.kwargs.items() if k not in VECTOR_ONLY_KWARGS}
+    try:
+        game = PinballOptions(**{**spec.kwargs, **kwargs})
+        if not game.generated and not isinstance(game.table, Table):
+            check_playable(load_any_table(game.table))
     except (ValueError, TypeError) as error:  # TableError is a ValueError
         fail("env.kwargs", str(error))
 

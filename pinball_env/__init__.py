@@ -1,7 +1,7 @@
 """A pinball table for reinforcement learning, moved by swept (continuous) collision.
 
 Importing the package registers ``Pinball-v0`` (the classic table, or any other) and
-``PinballProcgen-v0`` (a generated table each game, see ``pinball_env.procgen_env``) with
+``PinballProcgen-v0`` (a generated table each game, the table source ``"generated"``) with
 Gymnasium::
 
     import gymnasium as gym
@@ -14,11 +14,12 @@ Gymnasium::
 
 from gymnasium.envs.registration import register
 
+from pinball_env.options import GENERATED, MAX_EPISODE_STEPS
+
 __version__ = "0.1.0"
 
-# Two minutes of play at 60 frames per second.
-MAX_EPISODE_STEPS = 7200
-
+# The entry points keep the names saved env specs know (pinball_env.env and .vector_env
+# re-export the classes of pinball_env.envs).
 register(
     id="Pinball-v0",
     entry_point="pinball_env.env:PinballEnv",
@@ -26,9 +27,11 @@ register(
     max_episode_steps=MAX_EPISODE_STEPS,
 )
 
+# The same envs on a generated table each game (the table source "generated").
 register(
     id="PinballProcgen-v0",
-    entry_point="pinball_env.procgen_env:PinballProcgenEnv",
-    vector_entry_point="pinball_env.procgen_env:PinballProcgenVectorEnv",
+    entry_point="pinball_env.env:PinballEnv",
+    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
+    kwargs={"table": GENERATED},
 )

@@ -15,12 +15,10 @@ from typing import Any, ClassVar
 
 import numba
 import numpy as np
-from numba.typed import List
 
 from pinball_env.parallel import EnvThreads
 from pinball_env.physics import (
     CONTACT_CAPACITY,
-    element_count,
     make_scratch,
     make_state,
     step_tables,
@@ -36,10 +34,9 @@ from pinball_env.physics.columns import (
     CONTACT_TIME,
     FLIPPER_REST_ANGLE,
 )
+from pinball_env.sim.tables import EnvTables
 from pinball_env.table import BUTTONS, Table
 
-# Tables whose packed arrays World.set_table keeps, to give them to an env again at no cost.
-MAX_PACKED = 1024
 # Fastest ball World.place_ball accepts [m/s]: far beyond any table (tables and resets allow
 # 100 m/s; the property tests fire balls at up to 1 km/s), well inside exact arithmetic.
 MAX_PLACE_SPEED = 1e4
@@ -73,8 +70,11 @@ class World:
     :meth:`set_table` gives some env another, stepped together.
 
     Attributes:
-        table: the validated table (env 0's, and every env's that :meth:`set_table` did not
-            change; :meth:`table_of` gives any env's).
+        tables: the static per-env record (:class:`~pinball_env.sim.tables.EnvTables`): every
+            env's table, packed, with the numbers the rules and observations read of it.
+        table: the table the World was made with, every env's until :meth:`set_table` gives
+            one another (:meth:`table_of` is any env's); its ball and simulation settings are
+            every env's.
         geometry, settings: ``table`` as the kernel sees it (``table.pack()``,
             ``table.pack_settings()``).
         state: the kernel's per-env arrays (``physics.State``): balls, active, flipper angles
@@ -91,22 +91,11 @@ class World:
     def __init__(self, table: Table, n_envs: int = 1, num_threads: int = 1) -> None:
         self.threads = EnvThreads(num_threads)
         self._entry: Callable[..., int] | None = None
-        self.table = table
-        self.geometry = table.pack()
-        self.settings = table.pack_settings()
+        self.tables = EnvTables(table, n_envs)
         self.state = make_state(self.geometry, n_envs)
         self.scratch = make_scratch(self.geometry, self.settings, n_envs)
         # Column of the buttons array that drives each flipper.
         self.flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
-        # Points per element id, per env (rows padded with 0 once envs have their own tables).
-        self.scores = np.tile(np.asarray(table.element_scores, dtype=np.int64), (n_envs, 1))
-        # Per-env tables, once set_table has given an env its own: the tables and their packed
-        # arrays (typed lists, the kernel's).
-        self._tables: list[Table] | None = None
-        self._geometries: List | None = None
-        self._settings: List | None = None
-        self._packed: dict[int, tuple[Table, Any, Any]] = {}  # id -> (table, packed arrays)
-        self._same_geometries: List | None = None  # geometries() while every env has `table`
         self._everyone = np.ones(n_envs, dtype=bool)  # the kernel's mask that steps every env
         for env in range(n_envs):
             self.rest_flippers(env)
@@ -115,6 +104,27 @@ class World:
     @property
     def n_envs(self) -> int:
         return self.state.balls.shape[0]
+
+    @property
+    def table(self) -> Table:
+        return self.tables.first
+
+    @property
+    def geometry(self) -> Any:
+        return self.tables.geometry
+
+    @property
+    def settings(self) -> Any:
+        return self.tables.settings
+
+    @settings.setter
+    def settings(self, settings: Any) -> None:  # for tests that change the first table's
+        self.tables.settings = settings
+
+    @property
+    def scores(self) -> np.ndarray:
+        """(n_envs, elements) int64: points per element id, per env."""
+        return self.tables.scores
 
     # Shorthands for the arrays used most.
     @property
@@ -159,7 +169,7 @@ class World:
 
     def rest_flippers(self, env: int) -> None:
         """Put env ``env``'s flippers at rest against their lower stops, released."""
-        geometry = self.geometry_of(env)
+        geometry = self.tables.geometry_of(env)
         self.state.flipper_angle[env] = geometry.flippers[:, FLIPPER_REST_ANGLE]
         self.state.flipper_omega[env] = 0.0
         self.state.flipper_command[env] = False
@@ -168,28 +178,7 @@ class World:
 
     def table_of(self, env: int) -> Table:
         """The table env ``env`` plays."""
-        return self.table if self._tables is None else self._tables[env]
-
-    def geometry_of(self, env: int) -> Any:
-        """The packed table (``physics.Geometry``) env ``env`` plays."""
-        return self.geometry if self._geometries is None else self._geometries[env]
-
-    def geometries(self) -> List:
-        """Every env's packed table, a typed list (for compiled code that takes one per env)."""
-        if self._geometries is None:
-            if self._same_geometries is None:
-                self._same_geometries = List([self.geometry] * self.n_envs)
-            return self._same_geometries
-        return self._geometries
-
-    def tables(self) -> tuple[Any, Any]:
-        """The packed tables and settings the envs play (for compiled code that steps each env
-        with ``physics.step_ball``): typed lists with an entry per env, or, while every env
-        plays ``table``, 1-tuples (numba then compiles the loop for the one table, which
-        steps 2 threads about 20% faster than a typed list)."""
-        if self._geometries is None:
-            return (self.geometry,), (self.settings,)
-        return self._geometries, self._settings
+        return self.tables.table(env)
 
     def set_table(self, env: int, table: Table) -> None:
         """Make env ``env`` play ``table`` from now on: its flippers at rest, its ball at the
@@ -200,34 +189,11 @@ class World:
                 f"table {table.name!r} has flippers on buttons {table.flipper_buttons}, the "
                 f"world's tables on {self.table.flipper_buttons}: every env needs the same"
             )
-        if self._tables is None:
-            self._tables = [self.table] * self.n_envs
-            self._pack_tables()
-        geometry, settings = self._pack(table)
-        self._fit(element_count(geometry), geometry.sensors.shape[0], settings.max_passes)
-        self._tables[env] = table
-        self._geometries[env] = geometry
-        self._settings[env] = settings
-        self.scores[env] = 0
-        self.scores[env, : len(table.element_scores)] = table.element_scores
+        if not self.tables.varied:
+            self._entry = None  # the kernel now takes a table per env
+        self._fit(*self.tables.set(env, table))
         self.rest_flippers(env)
         self.place_ball(env, table.ball.start, table.ball.velocity)
-
-    def _pack(self, table: Table) -> tuple[Any, Any]:
-        """``table``'s packed arrays and settings, packed once per table."""
-        packed = self._packed.get(id(table))
-        if packed is None or packed[0] is not table:
-            if len(self._packed) >= MAX_PACKED:
-                self._packed.clear()
-            packed = self._packed[id(table)] = (table, table.pack(), table.pack_settings())
-        return packed[1], packed[2]
-
-    def _pack_tables(self) -> None:
-        """The kernel's typed lists of every env's packed table."""
-        packed = [self._pack(t) for t in self._tables]
-        self._geometries = List([geometry for geometry, _ in packed])
-        self._settings = List([settings for _, settings in packed])
-        self._entry = None
 
     def _fit(self, n_elements: int, n_sensors: int, max_passes: int) -> None:
         """Widen the per-element rows of the state and scratch arrays (zero-padded) to hold a
@@ -246,7 +212,6 @@ class World:
             crossings=widen(self.scratch.crossings, n_sensors),
             hit_elements=widen(self.scratch.hit_elements, max_passes),
         )
-        self.scores = widen(self.scores, n_elements)
 
     def step(self, buttons: np.ndarray | None = None, envs: np.ndarray | None = None) -> None:
         """Advance every env (or those in ``envs``) by one frame.
@@ -283,35 +248,28 @@ class World:
         moving = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
         if moving.shape != (self.n_envs,):
             raise ValueError(f"envs must have shape ({self.n_envs},), got {moving.shape}")
-        if self._geometries is None:
-            args = (self.geometry, self.settings, self.state, self.scratch, moving)
+        if self.tables.varied:
+            geometries, settings = self.tables.kernel_arrays()
+            args = (geometries, settings, self.state, self.scratch, moving)
         else:
-            args = (self._geometries, self._settings, self.state, self.scratch, moving)
+            args = (self.geometry, self.settings, self.state, self.scratch, moving)
         return sum(self.threads.run(self._kernel(args), self.n_envs, *args))
 
     def _kernel(self, args: tuple) -> Callable[..., int]:
         """``step_world``'s (or ``step_tables``') compiled entry for these arrays' types."""
         if self._entry is None:
-            step = step_world if self._geometries is None else step_tables
+            step = step_tables if self.tables.varied else step_world
             self._entry = compiled_entry(step, (*args, 0, 0))
         return self._entry
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
-        state["_geometries"] = state["_settings"] = None  # nor typed lists
-        state["_same_geometries"] = None
-        state["_packed"] = {}  # keyed by ids, which a copy's tables do not keep
         return state
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        if self._tables is not None:  # a copy packs its tables again
-            self._pack_tables()
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""
-        return (self.state.hits * self.scores).sum(axis=1)
+        return (self.state.hits * self.tables.scores).sum(axis=1)
 
     def frame_contacts(self, env: int = 0) -> list[Contact]:
         """The logged contacts and sensor crossings of env ``env`` in the last frame."""

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pinball_env  # noqa: F401  (registers the envs)
-from pinball_env.procgen_env import frame_size, layout_table
+from pinball_env.envs import frame_size, layout_table
 from pinball_env.render import (
     BACKGROUND,
     SCOREBOARD_WIDTH,

@@ -5,7 +5,8 @@ import copy
 import numpy as np
 import pytest
 
-from pinball_env.game import DISCRETE_BUTTONS, MAX_SKIP_FRAMES, Game, discrete_action
+from pinball_env.game import DISCRETE_BUTTONS, MAX_RUN_ON_FRAMES, Game, discrete_action
+from pinball_env.observation import StateObserver
 from pinball_env.table import BUTTONS, load_table
 
 CLASSIC = load_table("classic")
@@ -24,7 +25,7 @@ def play(game: Game, rngs: list[np.random.Generator], actions: np.ndarray) -> li
     trace = []
     for step_actions in actions:
         reward, over = game.step(step_actions, rngs)
-        trace.append((game.observe(), reward.copy(), over.copy(), game.infos()))
+        trace.append((StateObserver(game).observe(), reward.copy(), over.copy(), game.infos()))
         for env in np.flatnonzero(over):
             game.new_game(env, rngs[env])
     return trace
@@ -32,7 +33,7 @@ def play(game: Game, rngs: list[np.random.Generator], actions: np.ndarray) -> li
 
 @pytest.mark.parametrize("action_type", ["discrete", "multibinary"])
 def test_a_batch_of_games_is_bitwise_the_single_games(action_type):
-    kwargs = {"action_type": action_type, "height_shaping": 0.5, "balls_per_game": 1}
+    kwargs = {"action_type": action_type, "height_shaping": 0.5, "balls": 1}
     n, steps = len(SEEDS), 1500
     actions = random_actions(action_type, n, steps, seed=7)
     batch = Game(CLASSIC, n_envs=n, **kwargs)
@@ -111,7 +112,7 @@ def test_discrete_actions_are_the_buttons_as_bits():
 
 
 def test_a_step_of_k_frames_is_k_frames_with_the_action_held():
-    kwargs = {"height_shaping": 0.5, "drain_penalty": 2.0, "balls_per_game": 2}
+    kwargs = {"height_shaping": 0.5, "drain_penalty": 2.0, "balls": 2}
     n, k, steps = len(SEEDS), 4, 600
     actions = random_actions("discrete", n, steps, seed=11)
     skipping = Game(CLASSIC, n_envs=n, frame_skip=k, **kwargs)
@@ -137,7 +138,8 @@ def test_a_step_of_k_frames_is_k_frames_with_the_action_held():
         assert (skipping.state.points == points).all()
         assert (skipping.state.drained == drained).all()
         assert (over == ended).all()
-        assert skipping.observe().tobytes() == framing.observe().tobytes()
+        observed = [StateObserver(game).observe().tobytes() for game in (skipping, framing)]
+        assert observed[0] == observed[1]
         for env in np.flatnonzero(over):
             games_over += 1
             for game in (skipping, framing):
@@ -149,7 +151,7 @@ def test_a_step_of_k_frames_is_k_frames_with_the_action_held():
 def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
     # A game with skip_above is, frame by frame, the game that holds the action for the step's
     # frames, then releases the buttons while the ball is above the line (at most
-    # MAX_SKIP_FRAMES frames); it is asked again only with the ball low, or after that many.
+    # MAX_RUN_ON_FRAMES frames); it is asked again only with the ball low, or after that many.
     n, k, line = len(SEEDS), 2, 0.3
     skipping = Game(CLASSIC, n_envs=n, frame_skip=k, skip_above=line, drain_penalty=1.0)
     framing = Game(CLASSIC, n_envs=n, drain_penalty=1.0)
@@ -163,7 +165,7 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
         total = np.zeros(n)
         ended = np.zeros(n, dtype=bool)
         frames = np.zeros(n, dtype=np.int64)
-        for frame in range(k + MAX_SKIP_FRAMES):
+        for frame in range(k + MAX_RUN_ON_FRAMES):
             high = framing.world.balls[:, 1] > line * CLASSIC.height
             going = ~ended & ((frame < k) | (high & framing.world.active))
             if not going.any():
@@ -174,11 +176,12 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
             frames += going
             ended |= frame_over
         assert reward.tobytes() == total.tobytes()
-        assert skipping.observe().tobytes() == framing.observe().tobytes()
+        observed = [StateObserver(game).observe().tobytes() for game in (skipping, framing)]
+        assert observed[0] == observed[1]
         assert (skipping.state.frames == framing.state.frames).all()
         high = skipping.world.balls[:, 1] > line * CLASSIC.height
         asked_high = high & skipping.world.active & ~over
-        assert (frames[asked_high] == k + MAX_SKIP_FRAMES).all()  # only after the most
+        assert (frames[asked_high] == k + MAX_RUN_ON_FRAMES).all()  # only after the most
         high_asks += int(asked_high.sum())
         lengths += int(frames.sum())
         for env in np.flatnonzero(over):
@@ -196,7 +199,7 @@ def test_the_compiled_step_loop_plays_the_frame_by_frame_loop_bitwise(num_thread
     # swept physics, are one game: launches after drains, a ball search (env 0's ball rests on
     # the plunger), the time limit.
     kwargs = {"frame_skip": 2, "skip_above": 0.26, "height_shaping": 1.0, "drain_penalty": 5.0,
-              "max_frames": 1500, "balls_per_game": 2}  # fmt: skip
+              "max_frames": 1500, "balls": 2}  # fmt: skip
     n = len(SEEDS)
     compiled = Game(CLASSIC, n_envs=n, num_threads=num_threads, **kwargs)
     framing = Game(CLASSIC, n_envs=n, **kwargs)

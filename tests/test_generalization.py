@@ -42,7 +42,7 @@ def test_the_benchmark_trains_and_tests_each_layout_count(tmp_path):
 
 
 def test_the_held_out_layouts_are_beyond_every_training_draw():
-    from pinball_env.procgen_env import UNLIMITED_LAYOUTS
+    from pinball_env.envs.layouts import UNLIMITED_LAYOUTS
 
     assert TEST_START > UNLIMITED_LAYOUTS
 

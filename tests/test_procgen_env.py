@@ -8,14 +8,18 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import pinball_env  # noqa: F401  (registers the envs)
-from pinball_env.procgen_env import (
-    RAY_RANGE,
-    PinballProcgenEnv,
-    PinballProcgenVectorEnv,
-    cast_rays,
-    layout_table,
-)
+from pinball_env.envs import PinballEnv, PinballVectorEnv, layout_table
+from pinball_env.physics.rays import RAY_RANGE, cast_rays
 from pinball_env.table import load_table
+
+
+def procgen_env(**kwargs):  # the env PinballProcgen-v0 makes
+    return PinballEnv(table="generated", **kwargs)
+
+
+def procgen_vector_env(**kwargs):
+    return PinballVectorEnv(table="generated", **kwargs)
+
 
 INFO_KEYS = ("ball_position", "ball_velocity", "score", "balls_left", "points", "drained",
              "frames", "layout")  # fmt: skip
@@ -32,7 +36,7 @@ INFO_KEYS = ("ball_position", "ball_velocity", "score", "balls_left", "points", 
 )  # fmt: skip
 def test_check_env_passes_without_warnings(kwargs):
     with pytest.warns() as record:
-        check_env(PinballProcgenEnv(**kwargs), skip_render_check=True)
+        check_env(procgen_env(**kwargs), skip_render_check=True)
         import warnings
 
         warnings.warn("sentinel", stacklevel=1)
@@ -52,7 +56,7 @@ def test_check_env_passes_without_warnings(kwargs):
 def test_the_vector_env_of_many_tables_is_bitwise_n_single_envs(kwargs):
     n, steps, seed = 4, 700, 5
     vector = gym.make_vec("PinballProcgen-v0", num_envs=n, **kwargs)
-    assert isinstance(vector, PinballProcgenVectorEnv)
+    assert isinstance(vector, PinballVectorEnv)
     singles = [gym.make("PinballProcgen-v0", **kwargs) for _ in range(n)]
     obs, infos = vector.reset(seed=seed)
     for env, single in enumerate(singles):
@@ -83,7 +87,7 @@ def test_the_vector_env_of_many_tables_is_bitwise_n_single_envs(kwargs):
 
 
 def test_layouts_come_from_the_env_range_and_can_be_chosen():
-    env = PinballProcgenEnv(num_layouts=3, start_layout=40)
+    env = procgen_env(num_layouts=3, start_layout=40)
     seen = {env.reset(seed=s)[1]["layout"] for s in range(30)}
     assert seen == {40, 41, 42}
     _, info = env.reset(options={"layout": 41})
@@ -91,13 +95,13 @@ def test_layouts_come_from_the_env_range_and_can_be_chosen():
     for bad in (39, 43, 41.0, "41"):
         with pytest.raises(ValueError, match=r"layout must be an integer in \[40, 43\)"):
             env.reset(options={"layout": bad})
-    one = PinballProcgenEnv(num_layouts=1, start_layout=7, difficulty="hard")
+    one = procgen_env(num_layouts=1, start_layout=7, difficulty="hard")
     assert {one.reset(seed=s)[1]["layout"] for s in range(5)} == {7}
     assert one.table == layout_table(7, "hard")
 
 
 def test_the_vector_env_plays_the_layouts_it_is_given():
-    vector = PinballProcgenVectorEnv(num_envs=3, num_layouts=100, start_layout=500)
+    vector = procgen_vector_env(num_envs=3, num_layouts=100, start_layout=500)
     _, infos = vector.reset(seed=0, options={"layout": [510, 520, 530]})
     assert list(infos["layout"]) == [510, 520, 530]
     assert [vector.game.world.table_of(i).name for i in range(3)] == [
@@ -108,7 +112,7 @@ def test_the_vector_env_plays_the_layouts_it_is_given():
 
 
 def test_observations_keep_their_bounds_on_every_layout():
-    env = PinballProcgenEnv(num_layouts=0, rays=12, difficulty="hard", frame_skip=4)
+    env = procgen_env(num_layouts=0, rays=12, difficulty="hard", frame_skip=4)
     space = env.observation_space
     assert space.shape == (10 + 12,)
     env.action_space.seed(0)
@@ -142,7 +146,7 @@ def test_the_procgen_env_is_in_gymnasiums_registry():
     spec = gym.spec("PinballProcgen-v0")
     assert spec.max_episode_steps == 7200
     env = gym.make("PinballProcgen-v0", num_layouts=2)
-    assert isinstance(env.unwrapped, PinballProcgenEnv)
+    assert isinstance(env.unwrapped, PinballEnv) and env.unwrapped.layouts is not None
 
 
 @pytest.mark.parametrize(
@@ -158,17 +162,18 @@ def test_the_procgen_env_is_in_gymnasiums_registry():
 )
 def test_bad_procgen_options_are_clear_errors(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        PinballProcgenEnv(**kwargs)
+        procgen_env(**kwargs)
     with pytest.raises(ValueError, match=message):
-        PinballProcgenVectorEnv(num_envs=2, **kwargs)
+        procgen_vector_env(num_envs=2, **kwargs)
 
 
 def test_a_reset_generates_its_tables_together_and_shows_progress(monkeypatch, capsys):
-    from pinball_env import procgen_env
+    from pinball_env.envs import layouts
+    from pinball_env.procgen import generate_table
 
-    monkeypatch.setattr(procgen_env, "PROGRESS_AFTER", 0.0)  # show it however quick
-    monkeypatch.setattr(procgen_env, "PROGRESS_EVERY", 0.0)
-    vector = PinballProcgenVectorEnv(num_envs=4, num_layouts=0, start_layout=7_000_000)
+    monkeypatch.setattr(layouts, "PROGRESS_AFTER", 0.0)  # show it however quick
+    monkeypatch.setattr(layouts, "PROGRESS_EVERY", 0.0)
+    vector = procgen_vector_env(num_envs=4, num_layouts=0, start_layout=7_000_000)
     capsys.readouterr()
     _, infos = vector.reset(seed=0)
     layouts = sorted(set(infos["layout"].tolist()))
@@ -177,4 +182,4 @@ def test_a_reset_generates_its_tables_together_and_shows_progress(monkeypatch, c
     assert count > 1 and f"generating {count} easy tables: {count}/{count}" in shown
     for env, layout in enumerate(infos["layout"]):
         assert vector.get_attr("table")[env] is layout_table(int(layout), "easy")
-    assert vector.get_attr("table")[0] == procgen_env.generate_table(int(infos["layout"][0]))
+    assert vector.get_attr("table")[0] == generate_table(int(infos["layout"][0]))

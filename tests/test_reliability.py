@@ -575,7 +575,7 @@ def test_frames_show_a_scoreboard_and_the_drained_ball():
         pass
     last = env.render()
     assert not np.array_equal(first[:, width:], last[:, width:])  # the balls left changed
-    empty = env.unwrapped._frame_renderer.frame(
+    empty = env.unwrapped.core.frame_renderers(env.unwrapped.table).frame(
         None, env.unwrapped.game.world.state.flipper_angle[0]
     )
     assert not np.array_equal(last[:, :width], empty)  # the drained ball is drawn

@@ -1,0 +1,158 @@
+"""What both env shells are made of: :class:`PinballCore` owns the game of N envs, its table
+source, its observer and its frames, and starts new games; ``PinballEnv`` (N = 1) and
+``PinballVectorEnv`` (N) add only Gymnasium's API around it.
+"""
+
+import functools
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from pinball_env.envs.layouts import Layouts, frame_size
+from pinball_env.game import DISCRETE_BUTTONS, Game
+from pinball_env.observation import TableRenderers, make_observer
+from pinball_env.options import PinballOptions
+from pinball_env.procgen import load_any_table
+from pinball_env.render import FrameRenderer, Renderer, render_size, scoreboard
+from pinball_env.table import BUTTONS, Table
+
+
+class PinballCore:
+    """``n_envs`` games played by ``options``: on the table ``options.table``, or, with
+    ``table="generated"``, each game on a layout its env draws (:class:`Layouts`).
+
+    Attributes:
+        options: the :class:`PinballOptions`.
+        game: the rules and physics of every env.
+        layouts: the generated-table source (None for a fixed table).
+        layout: (n_envs,) int64, each env's layout (None for a fixed table).
+        observer: the observation of every env (``observer.space`` is one env's).
+        action_space: one env's.
+        steps_per_second: steps at real speed.
+    """
+
+    def __init__(self, options: PinballOptions, n_envs: int = 1, num_threads: int = 1) -> None:
+        self.options = options
+        self.layouts: Layouts | None = None
+        self.layout: np.ndarray | None = None
+        if options.generated:
+            self.layouts = Layouts(options.num_layouts, options.start_layout, options.difficulty)
+            table = self.layouts.table(self.layouts.start)
+            self.layout = np.full(n_envs, self.layouts.start, dtype=np.int64)
+        elif isinstance(options.table, Table):
+            table = options.table
+        else:
+            table = load_any_table(options.table)
+        threads = num_threads if options.physics == "swept" else 1
+        self.game = Game(table, n_envs, options, threads)
+        self.observer = make_observer(
+            self.game, options.obs_type, options.image_size, options.generated, options.rays
+        )
+        if options.action_type == "discrete":
+            self.action_space: spaces.Space = spaces.Discrete(len(DISCRETE_BUTTONS))
+        else:
+            self.action_space = spaces.MultiBinary(len(BUTTONS))
+        self.steps_per_second = table.simulation.frame_rate / options.frame_skip
+        # The frames render() shows: of one size for every layout of generated tables.
+        if options.generated:
+            width, height = frame_size(options.difficulty)
+            make = functools.partial(FrameRenderer, width=width, height=height)
+        else:
+            make = full_size_renderer
+        self.frame_renderers = TableRenderers(make)
+
+    @property
+    def n_envs(self) -> int:
+        return self.game.n_envs
+
+    @property
+    def render_fps(self) -> int:
+        """``metadata["render_fps"]``: the steps per second rounded to an int, at least 1 (as
+        ``gymnasium.utils.play`` requires; windows keep the exact rate)."""
+        return max(1, round(self.steps_per_second))
+
+    def seeded(self, envs: Sequence[int]) -> None:
+        """A reset seeded ``envs``' generators: the layouts drawn ahead from the generators
+        they had are dropped (the others' stay, as a single env that is not reset keeps its
+        own)."""
+        if self.layouts is not None:
+            self.layouts.forget(None if len(envs) == self.n_envs else envs)
+
+    def new_games(
+        self,
+        envs: Sequence[int],
+        rngs: Sequence[np.random.Generator],
+        options: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Start new games in ``envs`` (each drawing from its ``rngs`` entry). ``options``: the
+        reset options (``ball_position``, ``ball_velocity``; for generated tables ``layout``,
+        one for all or a sequence of one per env)."""
+        options = dict(options or {})
+        tables: dict[int, tuple[int, Table]] = {}
+        if self.layouts is not None:
+            tables = self._layout_tables(envs, rngs, options.pop("layout", None))
+        for env in envs:
+            env = int(env)
+            if env in tables:
+                layout, table = tables[env]
+                if table is not self.game.world.table_of(env):
+                    self.game.set_table(env, table)
+                self.layout[env] = layout
+            self.game.new_game(env, rngs[env], options)
+
+    def _layout_tables(
+        self, envs: Sequence[int], rngs: Sequence[np.random.Generator], chosen: Any
+    ) -> dict[int, tuple[int, Table]]:
+        """Each env's next layout and its table. Every env's layout first (each drawn from the
+        env's own generator, before its game's launch, as one env at a time would), so that
+        their tables are generated together."""
+        if isinstance(chosen, (Sequence, np.ndarray)) and not isinstance(chosen, str):
+            if len(chosen) != self.n_envs:
+                raise ValueError(
+                    f"a list of layouts needs one per env ({self.n_envs}), got {len(chosen)}"
+                )
+        else:
+            chosen = [chosen] * self.n_envs
+        layouts = {int(env): self.layouts.pick(int(env), rngs[env], chosen[env]) for env in envs}
+        tables = self.layouts.tables(layouts.values())
+        return {env: (layout, tables[layout]) for env, layout in layouts.items()}
+
+    def observe(self) -> np.ndarray:
+        """Every env's observation, (n_envs, ...)."""
+        return self.observer.observe()
+
+    def info(self, env: int) -> dict[str, Any]:
+        """Env ``env``'s info (the single env's): the game's, and the layout it plays."""
+        info = self.game.info(env)
+        if self.layout is not None:
+            info["layout"] = int(self.layout[env])
+        return info
+
+    def infos(self) -> dict[str, np.ndarray]:
+        """Every env's info as arrays (the vector env's): the game's, and the layouts."""
+        infos = self.game.infos()
+        if self.layout is not None:
+            infos["layout"] = self.layout.copy()
+        return infos
+
+    def frame(self, env: int) -> np.ndarray:
+        """The frame ``render()`` shows of env ``env``: its playfield (the ball where it
+        drained once the game is over) and a scoreboard beside it."""
+        world = self.game.world
+        renderer = self.frame_renderers(world.table_of(env))
+        playfield = renderer.frame(tuple(world.balls[env, :2]), world.state.flipper_angle[env])
+        board = scoreboard(playfield.shape[0], self.game.score[env], self.game.balls_left[env])
+        return np.concatenate([playfield, board], axis=1)
+
+    def close(self) -> None:
+        """Stop the threads (the envs' and the table generators')."""
+        if self.layouts is not None:
+            self.layouts.close()
+        self.game.world.threads.close()
+
+
+def full_size_renderer(table: Table) -> Renderer:
+    """The renderer of ``table``'s frames at the render scale (``render_size``)."""
+    return Renderer(table, *render_size(table))

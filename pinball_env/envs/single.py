@@ -1,0 +1,339 @@
+"""``PinballEnv``: the Gymnasium shell around a game of one env (``PinballCore``)."""
+
+import itertools
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.error import ResetNeeded
+
+from pinball_env.envs.core import PinballCore
+from pinball_env.envs.layouts import Layouts
+from pinball_env.game import DISCRETE_BUTTONS, Game, InvalidActions
+from pinball_env.options import PinballOptions
+from pinball_env.render import Window
+from pinball_env.table import BUTTONS, Table
+
+
+class PinballEnv(gym.Env):
+    """A real flipper-and-ball pinball table; the agent works the two flipper buttons.
+
+    ## Description
+
+    A 27 mm steel ball on a 0.51 m x 1.07 m playfield inclined at 6.5 degrees (the default
+    ``classic`` table: top arch, shooter lane and gate, three pop bumpers, two slingshots, in- and
+    outlanes, two flippers, a drain). The ball moves by swept (continuous) collision in fixed
+    substeps, so it never passes through a wall or a flipper; flippers swing up in 22 ms while
+    their button is held and fall back in 40 ms when it is released. Balls are put into play from
+    the plunger at a random speed; a game is ``balls`` balls.
+
+    ## Action Space
+
+    ``action_type="discrete"`` (default): ``Discrete(4)``
+
+    | Num | Action                  |
+    |-----|-------------------------|
+    | 0   | no button               |
+    | 1   | left flipper button     |
+    | 2   | right flipper button    |
+    | 3   | both buttons            |
+
+    ``action_type="multibinary"``: ``MultiBinary(2)``, (left button, right button).
+    A button acts for the whole step (one frame, 1/60 s, or ``frame_skip`` frames): held, the
+    flipper swings up to its stop and stays there; released, it falls back to rest.
+
+    On the keyboard (``get_keys_to_action``, for ``gymnasium.utils.play.play`` and
+    ``python -m pinball_env.tools.play``): left flipper Left Shift, Z or the left arrow; right
+    flipper Right Shift, M or the right arrow.
+
+    ## Observation Space
+
+    ``obs_type="state"`` (default): a ``Box`` of float32, table coordinates (x to the right,
+    y up the table, origin at the bottom-left corner), for a table with two flippers:
+
+    | Index | Observation                                   | Min   | Max   | Unit  |
+    |-------|-----------------------------------------------|-------|-------|-------|
+    | 0     | ball x                                        | 0     | 0.51  | m     |
+    | 1     | ball y                                        | 0     | 1.07  | m     |
+    | 2     | ball vx (clipped to +-20)                     | -20   | 20    | m/s   |
+    | 3     | ball vy (clipped to +-20)                     | -20   | 20    | m/s   |
+    | 4     | left flipper angle above rest                 | 0     | 0.873 | rad   |
+    | 5     | right flipper angle above rest                | 0     | 0.873 | rad   |
+    | 6     | left flipper angular velocity, + going up     | -39.7 | 39.7  | rad/s |
+    | 7     | right flipper angular velocity, + going up    | -39.7 | 39.7  | rad/s |
+    | 8     | ball in play (1) or game over (0)             | 0     | 1     | -     |
+    | 9     | balls left, the one in play included          | 0     | balls | -     |
+
+    The bounds come from the table (playfield size, flipper swing and speeds): for another table
+    the flipper rows repeat once per flipper in the table's order. A drained ball is replaced at
+    once by the next one on the plunger; after the last one the ball stays where it crossed the
+    drain.
+
+    ``obs_type="rgb"``: a ``Box(0, 255, (84, 84, 3), uint8)`` picture of the whole table (stretched
+    to the image), drawn without a display; ``obs_type="grayscale"``: the same as
+    ``(84, 84, 1)`` luminance. ``image_size`` changes the size.
+
+    ## Rewards
+
+    The points of the step's scoring events times ``reward_scale`` (default 0.01): a pop bumper
+    is 100 points (reward 1), a slingshot or a rollover 10 (0.1). Optional shaping, off by
+    default: ``height_shaping`` times the rise of the ball during the step in table heights (a
+    potential, so it sums to ``height_shaping`` times the net rise of each ball, from its launch
+    to where it drains); ``drain_penalty`` taken off for each ball that drains.
+
+    ## Starting State
+
+    Flippers at rest, score 0, ``balls`` balls to play; the first ball is fired up the shooter
+    lane at a speed drawn uniformly from the table's plunger range (2.2-3.2 m/s on ``classic``).
+    ``reset(options={"ball_position": [x, y], "ball_velocity": [vx, vy]})`` (metres, metres per
+    second; either key alone is allowed) puts the ball in play at that state instead, for tests
+    and curricula. The state is checked as a table file is: inside the outline, clear of every
+    element, somewhere a ball in play can get to from the plunger (not inside a slingshot, not
+    below the drain), at most 100 m/s.
+
+    ## Episode End
+
+    Termination: the last ball drains (the game is over). Truncation: only by the ``TimeLimit``
+    wrapper, ``max_episode_steps=7200`` (two minutes of play) for ``Pinball-v0``; it counts
+    steps, so with ``frame_skip=k`` pass ``max_episode_steps=7200 // k`` for the same two
+    minutes. Every game can
+    end: a ball in play that has not moved a ball radius in 10 s (resting in the shooter lane,
+    or held in a flipper's cradle) is served again from the plunger, as a real machine's ball
+    search would, without losing a ball. Stepping before the first ``reset`` raises Gymnasium's
+    ``ResetNeeded``.
+
+    ``info`` (reset and step): ``ball_position``, ``ball_velocity`` (float64 arrays, m and m/s),
+    ``score`` (points this game), ``balls_left``, ``events`` (scoring element name -> hits this
+    step), ``points`` (this step), ``drained`` (a ball drained this step) and ``frames``
+    (frames played in this game).
+
+    ## Generated tables (``PinballProcgen-v0``)
+
+    ``table="generated"`` (what ``PinballProcgen-v0`` registers) plays every game on a layout,
+    a table generated from a seed (``pinball_env.procgen.generate_table``), so that an agent
+    can be trained on some layouts and tested on others, as in Procgen. Layouts are the seeds
+    ``[start_layout, start_layout + num_layouts)`` (``num_layouts=0``: unlimited,
+    ``[start_layout, start_layout + 2**31)``); each reset draws one uniformly with the env's
+    random generator (``reset(seed=...)`` fixes the sequence), or plays the one given as
+    ``reset(options={"layout": seed})``. ``difficulty``: ``"easy"`` or ``"hard"`` tables.
+    ``info["layout"]`` (and the attribute ``layout``) is the layout of the game. The state
+    observation is then normalised to the table, so that it means the same on every layout:
+    ball x and y in table widths and heights (0-1), vx and vy [m/s] (clipped to +-20), each
+    flipper's angle above rest in swings (0-1) and angular velocity in top speeds (-1..1),
+    ball in play, balls left. Images are each game's own table. ``render_mode`` frames have one
+    size for every layout of a difficulty, so that video recorders and windows take them: the
+    playfield part is ``envs.frame_size`` (360 x 792 pixels), each table fitted into it with
+    its aspect kept and centred, the scoreboard beside it: (792, 470, 3) uint8. The table of
+    each env's next game is generated in the background while this one is played.
+
+    ``rays=K`` (any table): K more entries after the state observation, the distances from the
+    ball's centre to the first wall, post or flipper along K directions evenly round the
+    circle (the first along +x, counter-clockwise), in 0.5 m (1: nothing that near), so that a
+    state policy can see the layout.
+
+    ## Arguments
+
+    ```python
+    gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
+             reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, frame_skip=1,
+             skip_above=0.0, max_frames=None, image_size=(84, 84), physics="swept",
+             render_mode=None, num_layouts=0, start_layout=0, difficulty="easy", rays=0)
+    gym.make("PinballProcgen-v0", num_layouts=16, ...)  # table="generated", the rest the same
+    ```
+
+    The options are ``pinball_env.options.PinballOptions`` (each checked when the env is
+    made); ``PinballEnv(options)`` takes them as one record, keywords replacing any of them.
+
+    ```python
+    PinballEnv(PinballOptions(frame_skip=4), balls=1)
+    ```
+
+    - ``table``: a built-in table name (``"classic"``; the built-in tables are package data in
+      ``pinball_env/table/tables``), a generated one (``"procgen:SEED"``,
+      ``"procgen-hard:SEED"``), a path to a table YAML file, a ``Table``, or ``"generated"`` (a
+      generated table every game, above). A game needs a plunger, flippers, a closed outline
+      and a drain (``"box"`` is a physics test box without them).
+    - ``obs_type``: ``"state"``, ``"rgb"`` or ``"grayscale"``.
+    - ``action_type``: ``"discrete"`` or ``"multibinary"``.
+    - ``balls``: balls per game (>= 1).
+    - ``reward_scale``: reward per point.
+    - ``height_shaping``: weight of the optional height shaping term (0 = off).
+    - ``drain_penalty``: reward taken off for each ball that drains (0 = off).
+    - ``frame_skip``: frames per step (1-60), the action held on each; rewards, ``points`` and
+      ``drained`` are summed over them, and a game that ends stops there.
+    - ``skip_above``: a training aid, 0 (off) or a height in table heights (0-1): after the
+      step's frames, while the ball is in play above that height, the buttons are released and
+      the step runs on (up to 60 more frames), so that the agent is asked only while the ball
+      is low, near the flippers.
+    - ``max_frames``: None, or the frames a game lasts: the step that reaches it stops there
+      and returns ``truncated`` (a time limit in frames, whatever the frame skip; the
+      ``TimeLimit`` wrapper's ``max_episode_steps`` counts steps).
+    - ``image_size``: (height, width) of image observations, in pixels, or one int for a square.
+    - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
+      pymunk, for cross-checks, on a fixed table; needs the ``crosscheck`` extra).
+    - ``num_layouts``, ``start_layout``, ``difficulty``: the layouts of ``table="generated"``
+      (an error with any other table).
+    - ``rays``: ray distances after the state observation (0-64).
+    - ``render_mode``: ``"human"`` (a pygame window at real speed, frame rate over
+      ``frame_skip`` steps per second, needs the ``render`` extra; ``metadata["render_fps"]`` is
+      that rate rounded to an int, at least 1) or ``"rgb_array"`` (an aspect-correct uint8
+      HxWx3 frame, no display needed). A frame shows the playfield (the ball where it drained
+      once the game is over) and beside it a scoreboard with the score and the balls left.
+
+    ## Version History
+
+    - v0: first release: swept collision against walls, posts and rotating flippers.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 60}
+    # The keyboard's flipper buttons (pygame key names), by button: get_keys_to_action's map,
+    # which gymnasium.utils.play and python -m pinball_env.tools.play both use.
+    FLIPPER_KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "left": ("K_LSHIFT", "K_z", "K_LEFT"),
+        "right": ("K_RSHIFT", "K_m", "K_RIGHT"),
+    }
+
+    def __init__(self, options: PinballOptions | None = None, **kwargs: Any) -> None:
+        if options is None or kwargs:
+            base = {} if options is None else options.to_kwargs()
+            options = PinballOptions.from_kwargs(type(self).__name__, {**base, **kwargs})
+        self.options = options
+        self.core = PinballCore(options)
+        self.render_mode = options.render_mode
+        self.steps_per_second = self.core.steps_per_second
+        self.metadata = {**self.metadata, "render_fps": self.core.render_fps}
+        self.action_space = self.core.action_space
+        self.observation_space = self.core.observer.space
+        self._reset_done = False
+        self._window: Window | None = None
+
+    # --- Gymnasium API ----------------------------------------------------------------------
+
+    def reset(
+        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        if seed is not None:
+            self.core.seeded([0])
+        self.core.new_games([0], [self.np_random], options)
+        self._reset_done = True
+        if self.render_mode == "human":
+            self.render()
+        return self.core.observe()[0], self.core.info(0)
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if not self._reset_done:
+            raise ResetNeeded("call reset() before step(): no game has started")
+        try:  # the game checks the action, before anything changes
+            reward, game_over = self.game.step(np.asarray(action)[None], [self.np_random])
+        except InvalidActions:
+            raise ValueError(
+                f"invalid action {action!r}: expected an element of {self.action_space}"
+            ) from None
+        if self.render_mode == "human":
+            self.render()
+        out_of_time = bool(self.game.out_of_time()[0])
+        obs, info = self.core.observe()[0], self.core.info(0)
+        return obs, float(reward[0]), bool(game_over[0]), out_of_time, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' or "
+                "'human' to gym.make"
+            )
+            return None
+        frame = self.core.frame(0)
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:
+            self._window = Window((frame.shape[1], frame.shape[0]), self.steps_per_second)
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        self.core.close()
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        # A pygame window cannot be pickled; a copy opens its own when it first renders.
+        state = self.__dict__.copy()
+        state["_window"] = None
+        return state
+
+    def get_keys_to_action(self) -> dict[tuple[int, ...], int | np.ndarray]:
+        """The keyboard map of ``gymnasium.utils.play.play``: every non-empty set of the
+        :attr:`FLIPPER_KEYS` (a sorted tuple of pygame key codes) -> the action pressing the
+        buttons of its keys. Actions are ints for ``action_type="discrete"`` and int8 (left,
+        right) arrays for ``"multibinary"`` (then pass ``noop=np.array([0, 0])`` to ``play``,
+        whose default noop, 0, is not a MultiBinary action). Needs pygame for the key codes."""
+        pygame = Window.import_pygame()
+        keys = [
+            (getattr(pygame, name), button)
+            for button, names in enumerate(self.FLIPPER_KEYS[b] for b in BUTTONS)
+            for name in names
+        ]
+        # play looks up exactly the set of keys held, so every combination needs an entry.
+        mapping: dict[tuple[int, ...], int | np.ndarray] = {}
+        for count in range(1, len(keys) + 1):
+            for combination in itertools.combinations(keys, count):
+                pressed = np.zeros(len(BUTTONS), dtype=bool)
+                pressed[[button for _, button in combination]] = True
+                codes = tuple(sorted(code for code, _ in combination))
+                if self.action_type == "discrete":
+                    # The action whose row of DISCRETE_BUTTONS is the pressed buttons.
+                    mapping[codes] = int(np.flatnonzero((pressed == DISCRETE_BUTTONS).all(1))[0])
+                else:
+                    mapping[codes] = pressed.astype(np.int8)
+        return mapping
+
+    # --- what the env is playing -------------------------------------------------------------
+
+    @property
+    def game(self) -> Game:
+        """The rules and physics (a ``Game`` of one env)."""
+        return self.core.game
+
+    @property
+    def table(self) -> Table:
+        """The table of the game (of the game being played, with generated tables)."""
+        return self.game.world.table_of(0)
+
+    @property
+    def layouts(self) -> Layouts | None:
+        """The generated-table source (``table="generated"``), else None."""
+        return self.core.layouts
+
+    @property
+    def layout(self) -> int | None:
+        """The layout of the game (generated tables), else None."""
+        return None if self.core.layout is None else int(self.core.layout[0])
+
+    @property
+    def obs_type(self) -> str:
+        return self.options.obs_type
+
+    @property
+    def action_type(self) -> str:
+        return self.options.action_type
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        return self.options.image_size
+
+    @property
+    def rays(self) -> int:
+        return self.options.rays
+
+    @property
+    def reward_scale(self) -> float:
+        """Reward per point (the game's)."""
+        return self.game.reward_scale
+
+    @property
+    def height_shaping(self) -> float:
+        """Weight of the height shaping term (the game's)."""
+        return self.game.height_shaping

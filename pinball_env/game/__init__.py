@@ -1,0 +1,30 @@
+"""The game: the rules of pinball over a batch of envs (``rules.py``: actions, launches, drains,
+score, reward, infos) and the compiled loop that plays a step's frames (``play.py``)."""
+
+from pinball_env.game.rules import (
+    BALL_SEARCH_TIME,
+    DISCRETE_BUTTONS,
+    MAX_FRAME_SKIP,
+    MAX_RUN_ON_FRAMES,
+    RESET_OPTIONS,
+    Game,
+    GameState,
+    InvalidActions,
+    check_playable,
+    discrete_action,
+)
+from pinball_env.options import ACTION_TYPES
+
+__all__ = [
+    "ACTION_TYPES",
+    "BALL_SEARCH_TIME",
+    "DISCRETE_BUTTONS",
+    "MAX_FRAME_SKIP",
+    "MAX_RUN_ON_FRAMES",
+    "RESET_OPTIONS",
+    "Game",
+    "GameState",
+    "InvalidActions",
+    "check_playable",
+    "discrete_action",
+]

@@ -1,0 +1,420 @@
+"""The rules of pinball over a batch of envs: actions to buttons, balls per game, launches, drains,
+score, reward and the per-step info.
+
+Everything works over the env axis, so the single env (a Game of one) and a vector env (a Game
+of N) run the same code. A step's frames run in one compiled loop (``game.play.play_frames``);
+only launches (random draws) come back to Python. Everything that changes during play is in
+one record, :class:`GameState`, so that a game can be snapshotted and restored as one object;
+what does not change (every env's table) is the World's ``tables`` record.
+"""
+
+import reprlib
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from pinball_env.backends import make_world
+from pinball_env.game.play import (
+    AFTER_PHYSICS,
+    NEW_STEP,
+    PHYSICS,
+    STEP_DONE,
+    Rules,
+    new_progress,
+    play_frames,
+)
+from pinball_env.options import MAX_FRAME_SKIP, PinballOptions
+from pinball_env.physics import State
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.table import BUTTONS, TEST_TABLES, Table, check_ball_state
+from pinball_env.world import compiled_entry
+
+# A discrete action is the buttons held as bits: bit i is button BUTTONS[i] (0 none, 1 left,
+# 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's buttons.
+DISCRETE_BUTTONS = (np.arange(2 ** len(BUTTONS))[:, None] >> np.arange(len(BUTTONS))) & 1 == 1
+RESET_OPTIONS = ("ball_position", "ball_velocity")
+# Ball search: a ball in play that has not moved a ball radius in this long [s] (resting in the
+# shooter lane, say, or held in a flipper's cradle) is served again from the plunger, as a real
+# machine's ball search and auto-plunger would; no ball is lost. So every game can end.
+BALL_SEARCH_TIME = 10.0
+# Most frames one step runs on with the buttons released while the ball is high (skip_above),
+# after its frame_skip frames: then the agent is asked again, wherever the ball is.
+MAX_RUN_ON_FRAMES = 60
+
+
+class InvalidActions(ValueError):
+    """Actions that are not in the game's action space (raised before anything changes)."""
+
+
+def discrete_action(buttons: Sequence[bool]) -> int:
+    """The discrete action that holds ``buttons`` (one bool per entry of ``BUTTONS``)."""
+    return sum(int(bool(held)) << i for i, held in enumerate(buttons))
+
+
+class GameState(NamedTuple):
+    """Everything that changes during play, for every env (the first axis)."""
+
+    world: State  # the kernel's arrays: balls, flippers, contacts, hits
+    balls_left: np.ndarray  # (N,) int64: balls still to play, the one in play included
+    score: np.ndarray  # (N,) int64: points scored in the current game
+    drain_height: np.ndarray  # (N,) float64: where the last drained ball crossed the drain [m]
+    points: np.ndarray  # (N,) int64: points of the last step
+    drained: np.ndarray  # (N,) bool: a ball drained in the last step
+    anchor: np.ndarray  # (N, 2) float64: where the ball was when it last moved a radius [m]
+    still_frames: np.ndarray  # (N,) int64: frames since then (see BALL_SEARCH_TIME)
+    frames: np.ndarray  # (N,) int64: frames played in the current game
+
+
+class Game:
+    """``n_envs`` games on one table (until :meth:`set_table` gives an env another), each of
+    ``options.balls`` balls.
+
+    Args:
+        table: a validated table with a plunger, flippers, an outline and a drain.
+        n_envs: games played side by side.
+        options: the game's options (``PinballOptions``: balls, action_type, reward_scale,
+            height_shaping, drain_penalty, frame_skip, skip_above, max_frames, physics; the
+            others are the envs'), or None for the defaults; ``**kwargs`` replace any of them.
+            ``skip_above`` runs a step on, buttons released, for at most MAX_RUN_ON_FRAMES
+            frames while the ball is above it; ``max_frames`` ends a game's time
+            (:meth:`out_of_time`).
+        num_threads: threads that share the envs of a frame (the swept kernel).
+
+    Attributes:
+        world: the physics of every env (and, in ``world.tables``, every env's table).
+        state: the :class:`GameState` (``state.world`` is ``world.state``).
+        table: the table the game was made with; its ball and simulation are every env's.
+    """
+
+    def __init__(
+        self,
+        table: Table,
+        n_envs: int = 1,
+        options: PinballOptions | None = None,
+        num_threads: int = 1,
+        **kwargs: Any,
+    ) -> None:
+        check_playable(table)
+        options = options or PinballOptions()
+        if kwargs:
+            options = PinballOptions.from_kwargs("Game", {**options.to_kwargs(), **kwargs})
+        self.options = options
+        self.table = table
+        self.balls_per_game = options.balls
+        self.action_type = options.action_type
+        self.reward_scale = options.reward_scale
+        self.height_shaping = options.height_shaping
+        self.drain_penalty = options.drain_penalty
+        self.frame_skip = options.frame_skip
+        self.skip_above = options.skip_above
+        self.max_frames = options.max_frames
+        self.world = make_world(table, n_envs, options.physics, num_threads)
+        self.state = GameState(
+            world=self.world.state,
+            balls_left=np.zeros(n_envs, dtype=np.int64),
+            score=np.zeros(n_envs, dtype=np.int64),
+            drain_height=np.zeros(n_envs),
+            points=np.zeros(n_envs, dtype=np.int64),
+            drained=np.zeros(n_envs, dtype=bool),
+            anchor=np.zeros((n_envs, 2)),
+            still_frames=np.zeros(n_envs, dtype=np.int64),
+            frames=np.zeros(n_envs, dtype=np.int64),
+        )
+        self._everyone = np.ones(n_envs, dtype=bool)
+        self._rules: Rules | None = None  # the step loop's numbers (see _rules_now)
+        self._play: dict[type, Any] = {}  # play_frames's compiled entries (compiled_entry)
+        # Called after each frame's physics, when set: to record the frames a step runs on.
+        self.on_frame: Callable[[], None] | None = None
+        self._progress = new_progress(n_envs)
+        self.ball_search_frames = round(BALL_SEARCH_TIME * table.simulation.frame_rate)
+
+    def set_table(self, env: int, table: Table) -> None:
+        """Make env ``env`` play ``table`` (see ``World.set_table``); start a new game after.
+        The other envs' games go on."""
+        check_playable(table)
+        ball, simulation = table.ball, table.simulation
+        if ball.radius != self.table.ball.radius or simulation != self.table.simulation:
+            raise ValueError(
+                f"table {table.name!r} has another ball size or simulation settings than "
+                f"{self.table.name!r}: every env of a game needs the same"
+            )
+        self.world.set_table(env, table)
+        self.state = self.state._replace(world=self.world.state)  # it may have grown
+        self._rules = None  # heights and scores changed, and the arrays may have grown
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_play"] = {}  # compiled entries cannot be pickled; a copy finds its own
+        state["_rules"] = None  # a copy makes its own, over its own arrays
+        state["on_frame"] = None  # a recorder's, not the game's
+        return state
+
+    @property
+    def n_envs(self) -> int:
+        return self.world.n_envs
+
+    @property
+    def balls_left(self) -> np.ndarray:
+        return self.state.balls_left
+
+    @property
+    def score(self) -> np.ndarray:
+        return self.state.score
+
+    # --- state --------------------------------------------------------------------------------
+
+    def snapshot(self) -> GameState:
+        """A copy of the whole game state of every env."""
+        return _copy(self.state)
+
+    def restore(self, snapshot: GameState) -> None:
+        """Put every env back to ``snapshot`` (from :meth:`snapshot` of a Game on the same table
+        with as many envs)."""
+        _copy_into(snapshot, self.state)
+
+    # --- playing ------------------------------------------------------------------------------
+
+    def new_game(
+        self, env: int, rng: np.random.Generator, options: Mapping[str, Any] | None = None
+    ) -> None:
+        """Start a new game in env ``env``: flippers at rest, score 0, the first ball launched.
+
+        ``options`` may hold ``ball_position`` [m] and ``ball_velocity`` [m/s] to put the ball
+        in play at that state instead; they are checked before anything changes, so a rejected
+        reset leaves the env as it was.
+        """
+        options = dict(options or {})
+        unknown = sorted(reprlib.repr(key) for key in options if key not in RESET_OPTIONS)
+        if unknown:
+            raise ValueError(
+                f"unknown reset option(s) {', '.join(unknown[:5])} "
+                f"(allowed: {', '.join(RESET_OPTIONS)})"
+            )
+        if options:
+            table = self.world.table_of(env)
+            position = options.get("ball_position", table.plunger.position)
+            velocity = options.get("ball_velocity", (0.0, 0.0))
+            position, velocity = check_ball_state(table, position, velocity, "reset options")
+        self.world.rest_flippers(env)
+        state = self.state
+        state.world.hits[env] = 0  # the reset's info shows no events of the last game
+        state.world.contact_count[env] = 0
+        state.balls_left[env] = self.balls_per_game
+        state.score[env] = 0
+        state.points[env] = 0
+        state.drained[env] = False
+        state.frames[env] = 0
+        self.launch(env, rng)
+        if options:
+            self.world.place_ball(env, position, velocity)
+            self._moved(env)
+
+    def launch(self, env: int, rng: np.random.Generator) -> None:
+        """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range."""
+        low, high = self.world.table_of(env).plunger.speed
+        self.world.launch(env, float(rng.uniform(low, high)))
+        self._moved(env)
+
+    def _moved(self, env: int) -> None:
+        """Restart env ``env``'s ball-search clock where its ball is now."""
+        self.state.anchor[env] = self.world.balls[env, [BALL_X, BALL_Y]]
+        self.state.still_frames[env] = 0
+
+    def buttons(self, actions: Any) -> np.ndarray:
+        """The (n_envs, len(BUTTONS)) bool buttons held by ``actions``: (n_envs,) integers for
+        ``"discrete"``, (n_envs, len(BUTTONS)) zeros and ones for ``"multibinary"``."""
+        actions = np.asarray(actions)
+        if self.action_type == "discrete":
+            valid = (
+                actions.shape == (self.n_envs,)
+                and actions.dtype.kind in "biu"  # Gymnasium's Discrete takes True as 1
+                and actions.min() >= 0
+                and actions.max() < len(DISCRETE_BUTTONS)
+            )
+            if valid:  # (as integers: a bool array would index as a mask)
+                return DISCRETE_BUTTONS[actions.astype(np.intp)]
+            expected = f"({self.n_envs},) integers in [0, {len(DISCRETE_BUTTONS)})"
+        else:
+            shape = (self.n_envs, len(BUTTONS))
+            if actions.shape == shape and np.all((actions == 0) | (actions == 1)):
+                return actions.astype(bool)
+            expected = f"{shape} zeros and ones"
+        raise InvalidActions(
+            f"invalid actions: expected {expected} for action_type={self.action_type!r}, "
+            f"got shape {actions.shape} dtype {actions.dtype}"
+        )
+
+    def step(
+        self,
+        actions: Any,
+        rngs: Sequence[np.random.Generator],
+        frozen: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One step of every env with ``actions`` (see :meth:`buttons`): ``frame_skip`` frames,
+        the actions held on each; then, with ``skip_above``, more frames with the buttons
+        released while the ball is high. A drained ball is replaced by the next one off the
+        plunger (drawn from the env's ``rngs`` entry); the game ends when the last ball drains.
+        An env whose game ends, or runs out of time (``max_frames``), stays as it is for the
+        rest of the step. Envs where ``frozen`` (n_envs,) bool is set keep their state as it is
+        (a vector env's envs that have just been reset), with reward 0.
+
+        Each env's frames run in one compiled loop (``play_frames``), which comes back
+        here only for launches (they draw from the env's random stream), and, with a physics
+        backend other than the swept kernel or with :attr:`on_frame` set, for each frame's
+        physics; ``on_frame()`` is then called after it (the frame's points not yet counted).
+
+        Returns ``(reward, game_over)``, (n_envs,) float64 and bool, the reward summed over the
+        frames. The step's points and drains (summed) are in :attr:`state`.
+        """
+        commands = self.buttons(actions)[:, self.world.flipper_buttons]
+        progress = self._progress
+        playing = self._everyone if frozen is None else ~frozen
+        progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
+        rules = self._rules_now()
+        geometries, settings = self.world.tables.kernel_arrays()
+        # With on_frame the loop hands each frame's physics to Python (the same kernel), and the
+        # hook sees the frame.
+        swept = self.world.swept_kernel and self.on_frame is None
+        args = (geometries, settings, self.state, self.world.scratch, progress, rules, commands,
+                swept)  # fmt: skip
+        play = self._play.get(type(geometries))  # one table (tuples) or one per env (lists)
+        if play is None:
+            play = self._play[type(geometries)] = compiled_entry(play_frames, (*args, 0, 0))
+        while True:
+            self.world.threads.run(play, self.n_envs, *args)
+            if not progress.finite.all():
+                bad = np.flatnonzero(~progress.finite).tolist()
+                raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
+            physics = progress.stage == PHYSICS  # (not swept) the backend's frame is due
+            if physics.any():
+                self.world.step(None, physics)
+                progress.stage[physics] = AFTER_PHYSICS
+                if self.on_frame is not None:
+                    self.on_frame()
+            launches = np.flatnonzero(progress.launch)
+            for env in launches:
+                self.launch(env, rngs[env])
+            progress.launch[:] = False
+            if not physics.any() and len(launches) == 0:
+                break
+        self.state.points[playing] = progress.points[playing]
+        self.state.drained[playing] = progress.drained[playing]
+        return np.where(playing, progress.reward, 0.0), self.state.balls_left == 0
+
+    def out_of_time(self) -> np.ndarray:
+        """(n_envs,) bool: the game has played ``max_frames`` frames (never, without)."""
+        if self.max_frames is None:
+            return np.zeros(self.n_envs, dtype=bool)
+        return self.state.frames >= self.max_frames
+
+    def _rules_now(self) -> Rules:
+        """The numbers the compiled step loop plays by (per env where tables differ), made
+        again only after :meth:`set_table`."""
+        if self._rules is None:
+            self._rules = self._make_rules()
+        return self._rules
+
+    def _make_rules(self) -> Rules:
+        return Rules(
+            reward_scale=self.reward_scale,
+            drain_penalty=self.drain_penalty,
+            height_shaping=self.height_shaping,
+            heights=self.world.tables.height,
+            skip_heights=self.skip_above * self.world.tables.height,
+            frame_skip=self.frame_skip,
+            skip_frames=MAX_RUN_ON_FRAMES if self.skip_above else 0,
+            max_frames=-1 if self.max_frames is None else self.max_frames,
+            search_frames=self.ball_search_frames,
+            radius=self.table.ball.radius,
+            scores=self.world.tables.scores,
+        )
+
+    # --- what the envs report -----------------------------------------------------------------
+
+    def events(self, env: int) -> dict[str, int]:
+        """The scoring elements env ``env`` hit in the last step: name -> hits."""
+        hits = self.world.state.hits[env]
+        names = self.world.table_of(env).element_names
+        return {names[i]: int(hits[i]) for i in self.world.tables.scoring[env] if hits[i]}
+
+    def infos(self) -> dict[str, np.ndarray]:
+        """The per-step info of every env as arrays (first axis the env): ``ball_position`` [m],
+        ``ball_velocity`` [m/s], ``score``, ``balls_left``, ``points`` (this step),
+        ``drained`` (a ball drained this step) and ``frames`` (played in this game)."""
+        state, balls = self.state, self.world.balls
+        return {
+            "ball_position": balls[:, [BALL_X, BALL_Y]],
+            "ball_velocity": balls[:, [BALL_VX, BALL_VY]],
+            "score": state.score.copy(),
+            "balls_left": state.balls_left.copy(),
+            "points": state.points.copy(),
+            "drained": state.drained.copy(),
+            "frames": state.frames.copy(),
+        }
+
+    def info(self, env: int) -> dict[str, Any]:
+        """The per-step info of env ``env``: that of :meth:`infos` as Python numbers (the ball's
+        position and velocity as float64 arrays), plus ``events`` (:meth:`events`)."""
+        state, ball = self.state, self.world.balls[env]
+        return {
+            "ball_position": ball[[BALL_X, BALL_Y]],
+            "ball_velocity": ball[[BALL_VX, BALL_VY]],
+            "score": int(state.score[env]),
+            "balls_left": int(state.balls_left[env]),
+            "events": self.events(env),
+            "points": int(state.points[env]),
+            "drained": bool(state.drained[env]),
+            "frames": int(state.frames[env]),
+        }
+
+
+def check_playable(table: Table) -> None:
+    """A game needs a plunger to launch, flippers to play, an outline and a drain to end it: a
+    ValueError names everything the table lacks."""
+    lacks = [
+        what
+        for what, missing in (
+            ("no plunger to launch the ball", table.plunger is None),
+            ("no flippers to play", not table.flippers),
+            ("no closed outline wall to keep the ball in", table.outline is None),
+            ("no drain sensor to end a game", not any(s.drain for s in table.sensors)),
+        )
+        if missing
+    ]
+    if lacks:
+        rig = " (it is a physics test rig)" if table.name in TEST_TABLES else ""
+        raise ValueError(f"table {table.name!r} cannot be played{rig}: it has {', '.join(lacks)}")
+    if not table.drain_reachable:
+        raise ValueError(
+            f"table {table.name!r}: no drain can be reached from the plunger, a game could "
+            "never end"
+        )
+
+
+def _copy(record: tuple) -> Any:
+    """A deep copy of a record of arrays (and nested records)."""
+    return type(record)(*(_copy(v) if isinstance(v, tuple) else v.copy() for v in record))
+
+
+def _copy_into(source: tuple, target: tuple) -> None:
+    """Copy every array of record ``source`` into the same array of record ``target``."""
+    for src, dst in zip(source, target, strict=True):
+        if isinstance(dst, tuple):
+            _copy_into(src, dst)
+        else:
+            np.copyto(dst, src)
+
+
+__all__ = [
+    "BALL_SEARCH_TIME",
+    "DISCRETE_BUTTONS",
+    "MAX_FRAME_SKIP",
+    "MAX_RUN_ON_FRAMES",
+    "RESET_OPTIONS",
+    "Game",
+    "GameState",
+    "InvalidActions",
+    "check_playable",
+    "discrete_action",
+]

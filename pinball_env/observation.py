@@ -1,0 +1,176 @@
+"""What the agent sees: the observers of a game, each with its space and one ``observe`` for
+every env at once (the single env is a batch of one).
+
+- :class:`StateObserver`: ball x, y, vx, vy; each flipper's angle above rest and angular
+  velocity towards up; ball in play; balls left (in table units, or normalised to the table so
+  that they mean the same on every table), and optionally ray distances (``physics.rays``);
+- :class:`ImageObserver`: the table drawn as an RGB or grayscale picture.
+"""
+
+import functools
+from collections.abc import Callable
+
+import numpy as np
+from gymnasium import spaces
+from numba import njit
+
+from pinball_env.game import Game
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.rays import cast_all_rays
+from pinball_env.render import Renderer
+from pinball_env.sim.tables import flipper_numbers
+from pinball_env.table import Table
+
+# The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
+# real ball rarely exceeds 10 m/s on a table (a full flip at the tip gives about 5 m/s).
+MAX_OBS_SPEED = 20.0
+# Renderers kept per table (a renderer holds its table's static layer).
+CACHED_RENDERERS = 512
+
+
+class StateObserver:
+    """The state observation of every env of ``game`` (see ``PinballEnv``'s Observation Space).
+
+    ``normalised``: positions in table widths and heights, flipper angles in swings and angular
+    velocities in top speeds, so that the bounds are the same on every table (generated
+    tables); else in metres and radians, within the bounds of ``game.table``. ``rays``: that
+    many ray distances after the state, in ``RAY_RANGE`` (0-1).
+    """
+
+    def __init__(self, game: Game, normalised: bool = False, rays: int = 0) -> None:
+        self.game = game
+        self.normalised = normalised
+        self.rays = rays
+        low, high = self.bounds()
+        self.space = spaces.Box(low, high, dtype=np.float32)
+        self._ray_distances = np.zeros((game.n_envs, rays), dtype=np.float32)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of one env's observation (float32, one entry per feature)."""
+        table, balls = self.game.table, float(self.game.balls_per_game)
+        _, _, swing, top_speed = flipper_numbers(table)
+        n = len(swing)
+        speeds = [-MAX_OBS_SPEED, MAX_OBS_SPEED]
+        if self.normalised:
+            low = [0.0, 0.0, speeds[0], speeds[0]] + [0.0] * n + [-1.0] * n + [0.0, 0.0]
+            high = [1.0, 1.0, speeds[1], speeds[1]] + [1.0] * (2 * n) + [1.0, balls]
+        else:
+            low = np.concatenate([[0.0, 0.0, speeds[0], speeds[0]], np.zeros(n), -top_speed,
+                                  [0.0, 0.0]])  # fmt: skip
+            high = np.concatenate([[table.width, table.height, speeds[1], speeds[1]], swing,
+                                   top_speed, [1.0, balls]])  # fmt: skip
+        low = np.concatenate([low, np.zeros(self.rays)]).astype(np.float32)
+        high = np.concatenate([high, np.ones(self.rays)]).astype(np.float32)
+        return low, high
+
+    def observe(self) -> np.ndarray:
+        """(n_envs, features) float32."""
+        world, tables = self.game.world, self.game.world.tables
+        state = world.state
+        obs = state_observation(
+            state.balls, state.flipper_angle, state.flipper_omega, state.active,
+            self.game.state.balls_left, tables.flipper_rest, tables.flipper_up_sign,
+        )  # fmt: skip
+        if self.normalised:
+            n = tables.flipper_swing.shape[1]
+            obs[:, 0] /= tables.width
+            obs[:, 1] /= tables.height
+            obs[:, 4 : 4 + n] /= tables.flipper_swing
+            obs[:, 4 + n : 4 + 2 * n] /= tables.flipper_top_speed
+        if self.rays:
+            args = (state.balls, tables.geometries(), state.flipper_angle, self.rays,
+                    self._ray_distances)  # fmt: skip
+            world.threads.run(cast_all_rays, world.n_envs, *args)
+            obs = np.concatenate([obs, self._ray_distances], axis=1)
+        return obs
+
+
+class TableRenderers:
+    """A renderer per table, made once by ``make(table)`` (a renderer rasterises its table's
+    static layer when made), at most CACHED_RENDERERS kept."""
+
+    def __init__(self, make: Callable[[Table], Renderer]) -> None:
+        self.make = make
+        self._renderers: dict[int, tuple[Table, Renderer]] = {}  # id(table) -> its renderer
+
+    def __call__(self, table: Table) -> Renderer:
+        kept = self._renderers.get(id(table))
+        if kept is None or kept[0] is not table:
+            if len(self._renderers) >= CACHED_RENDERERS:
+                self._renderers.clear()
+            kept = self._renderers[id(table)] = (table, self.make(table))
+        return kept[1]
+
+
+class ImageObserver:
+    """The picture of every env's table (its own, where envs differ), ``image_size`` (height,
+    width) pixels, RGB or (``grayscale``) luma."""
+
+    def __init__(self, game: Game, image_size: tuple[int, int], grayscale: bool = False) -> None:
+        self.game = game
+        self.grayscale = grayscale
+        height, width = image_size
+        self.space = spaces.Box(0, 255, (height, width, 1 if grayscale else 3), dtype=np.uint8)
+        self.renderers = TableRenderers(functools.partial(Renderer, width=width, height=height))
+
+    def observe(self) -> np.ndarray:
+        """(n_envs, height, width, channels) uint8."""
+        world = self.game.world
+        state = world.state
+        if not world.tables.varied:
+            return self.renderers(world.table).frames(
+                state.balls, state.active, state.flipper_angle, grayscale=self.grayscale,
+                threads=world.threads,
+            )  # fmt: skip
+        frames = []
+        for env in range(world.n_envs):
+            one = slice(env, env + 1)
+            renderer = self.renderers(world.table_of(env))
+            frames.append(renderer.frames(
+                state.balls[one], state.active[one], state.flipper_angle[one],
+                grayscale=self.grayscale,
+            ))  # fmt: skip
+        return np.concatenate(frames)
+
+
+Observer = StateObserver | ImageObserver
+
+
+def make_observer(
+    game: Game, obs_type: str, image_size: tuple[int, int], normalised: bool, rays: int
+) -> Observer:
+    """The observer of ``obs_type`` (``"state"``, ``"rgb"`` or ``"grayscale"``)."""
+    if obs_type == "state":
+        return StateObserver(game, normalised, rays)
+    return ImageObserver(game, image_size, grayscale=obs_type == "grayscale")
+
+
+@njit(cache=True)
+def state_observation(balls, flipper_angle, flipper_omega, active, balls_left, rest, up_sign):
+    """The state observation of every env in table units, float32. Compiled: the single env
+    pays it every step."""
+    n_envs, n_flippers = flipper_angle.shape
+    obs = np.empty((n_envs, 6 + 2 * n_flippers), dtype=np.float32)
+    for env in range(n_envs):
+        obs[env, 0] = balls[env, BALL_X]
+        obs[env, 1] = balls[env, BALL_Y]
+        obs[env, 2] = min(max(balls[env, BALL_VX], -MAX_OBS_SPEED), MAX_OBS_SPEED)
+        obs[env, 3] = min(max(balls[env, BALL_VY], -MAX_OBS_SPEED), MAX_OBS_SPEED)
+        for j in range(n_flippers):
+            # The angle above rest (the kernel stops it exactly) and the speed towards up.
+            obs[env, 4 + j] = (flipper_angle[env, j] - rest[env, j]) * up_sign[env, j]
+            obs[env, 4 + n_flippers + j] = flipper_omega[env, j] * up_sign[env, j]
+        obs[env, 4 + 2 * n_flippers] = active[env]
+        obs[env, 5 + 2 * n_flippers] = balls_left[env]
+    return obs
+
+
+__all__ = [
+    "MAX_OBS_SPEED",
+    "ImageObserver",
+    "Observer",
+    "StateObserver",
+    "TableRenderers",
+    "make_observer",
+    "state_observation",
+]
