@@ -14,6 +14,9 @@ Gymnasium::
 
 from gymnasium.envs.registration import register
 
+# Generated tables' names ("procgen:SEED", "procgen-hard:SEED") resolve wherever a table name
+# is taken: the generator registers them with the table package when imported.
+import pinball_env.procgen  # noqa: F401
 from pinball_env.options import GENERATED, MAX_EPISODE_STEPS
 
 __version__ = "0.1.0"

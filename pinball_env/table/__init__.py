@@ -2,8 +2,9 @@
 
 - ``model.py``: the table model (frozen dataclasses) and ``Table.pack()``, the kernel's arrays;
 - ``schema.py``: the validation schema, ``table_from_dict`` and ``table_to_dict``;
-- ``files.py``: YAML loading and dumping, and the built-in tables (``tables/*.yaml``, package
-  data);
+- ``files.py``: YAML loading and dumping, the built-in tables (``tables/*.yaml``, package
+  data), and tables by name (``load_any_table``; generators such as ``pinball_env.procgen``
+  register their names' prefixes with ``register_generator``);
 - ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
 """
 
@@ -13,7 +14,10 @@ from pinball_env.table.files import (
     available_tables,
     builtin_tables_dir,
     dump_table,
+    generated_prefixes,
+    load_any_table,
     load_table,
+    register_generator,
 )
 from pinball_env.table.model import (
     BUTTONS,
@@ -56,7 +60,10 @@ __all__ = [
     "check_ball_state",
     "dump_table",
     "enclosure",
+    "generated_prefixes",
+    "load_any_table",
     "load_table",
+    "register_generator",
     "table_from_dict",
     "table_to_dict",
 ]

@@ -1,13 +1,19 @@
-"""Table files: YAML in, YAML out, and the built-in tables shipped with the package.
+"""Table files: YAML in, YAML out, the built-in tables shipped with the package, and tables
+by name, generated ones included.
 
 The built-in tables are package data in ``pinball_env/table/tables/`` (``classic.yaml``, the
 default, and ``box.yaml``), found through :mod:`importlib.resources` so that they work from a
-wheel as well as from a checkout.
+wheel as well as from a checkout. Generated tables are named ``PREFIX:...``; the package that
+makes them registers a function per prefix (:func:`register_generator`: ``pinball_env.procgen``
+registers ``procgen`` and ``procgen-hard`` when imported, as importing ``pinball_env`` does), so
+that :func:`load_any_table` takes their names while this package imports no generator.
 """
 
 from __future__ import annotations
 
 import os
+import re
+from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -69,7 +75,7 @@ def available_tables(kind: str = "game") -> list[str]:
 
 def load_table(name_or_path: str | os.PathLike[str]) -> Table:
     """Load a table from a .yaml/.yml path, or a built-in one by bare name (``"classic"``).
-    (``pinball_env.procgen.load_any_table`` also takes generated tables' names.)"""
+    (:func:`load_any_table` also takes generated tables' names.)"""
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise TypeError(f"a table is a name or a path, got {type(name_or_path).__name__}")
     path = Path(name_or_path)
@@ -120,3 +126,43 @@ def dump_table(table: Table, path: str | os.PathLike[str]) -> Path:
     text = yaml.safe_dump(table_to_dict(table), sort_keys=False, default_flow_style=None)
     path.write_text(text, encoding="utf-8")
     return path
+
+
+# A generated table's name: a prefix, a colon, and what the prefix's generator reads.
+GENERATED_NAME = re.compile(r"([A-Za-z][\w-]*):(.*)", re.DOTALL)
+# Generated tables by prefix: the function that makes the table of a name (see the docstring).
+_GENERATORS: dict[str, Callable[[str], Table]] = {}
+
+
+def register_generator(prefix: str, make: Callable[[str], Table]) -> None:
+    """Let :func:`load_any_table` take the names ``"PREFIX:..."``: ``make(name)`` returns the
+    table of such a name (or raises ``TableError``). Registering a prefix again replaces it."""
+    if not GENERATED_NAME.fullmatch(f"{prefix}:"):
+        raise ValueError(f"a generated table's prefix is a letter then letters, digits, _ or -, "
+                         f"got {prefix!r}")  # fmt: skip
+    _GENERATORS[prefix] = make
+
+
+def generated_prefixes() -> tuple[str, ...]:
+    """The prefixes of generated tables' names that :func:`load_any_table` takes now."""
+    return tuple(sorted(_GENERATORS))
+
+
+def load_any_table(name_or_path: str | os.PathLike[str]) -> Table:
+    """:func:`load_table`, and the generated tables by name (``"procgen:SEED"``,
+    ``"procgen-hard:SEED"``, any registered prefix): what the envs, the plot tool and the
+    training configs take. A name ``PREFIX:...`` whose prefix no generator registered (not a
+    path to a file) is a ``TableError`` naming those that are."""
+    match = GENERATED_NAME.fullmatch(name_or_path) if isinstance(name_or_path, str) else None
+    if match is not None:
+        make = _GENERATORS.get(match[1])
+        if make is not None:
+            return make(name_or_path)
+        path = Path(name_or_path)
+        if path.suffix not in SUFFIXES and len(path.parts) == 1:
+            registered = ", ".join(generated_prefixes()) or "none"
+            raise TableError(
+                f"unknown table {_shorten(name_or_path, 120)!r}: no generator of tables is "
+                f"registered for the prefix {match[1]!r} (registered: {registered})"
+            )
+    return load_table(name_or_path)

@@ -41,9 +41,10 @@ def _cells_near(x0, y0, x1, y1, reach, cell, n_rows, n_cols):
 
 
 @njit(cache=True)
-def _block_segments(blocked, segments, reach, cell):
-    """Mark the cells whose centre is within ``reach`` of a segment."""
-    n_rows, n_cols = blocked.shape
+def _mark_near_segments(marked, segments, reach, cell, closed):
+    """Mark the cells whose centre is closer than ``reach`` to a segment (or at ``reach`` too,
+    when ``closed``)."""
+    n_rows, n_cols = marked.shape
     for k in range(segments.shape[0]):
         x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
         r0, r1, c0, c1 = _cells_near(x0, y0, x1, y1, reach, cell, n_rows, n_cols)
@@ -51,8 +52,9 @@ def _block_segments(blocked, segments, reach, cell):
             y = (row + 0.5) * cell
             for col in range(c0, c1):
                 dx, dy = segment_offset((col + 0.5) * cell, y, x0, y0, x1, y1)
-                if dx * dx + dy * dy < reach * reach:
-                    blocked[row, col] = True
+                distance2 = dx * dx + dy * dy
+                if distance2 < reach * reach or (closed and distance2 == reach * reach):
+                    marked[row, col] = True
 
 
 @njit(cache=True)
@@ -135,8 +137,8 @@ def free_space(
     """
     blocked = np.zeros((math.ceil(height / CELL), math.ceil(width / CELL)), dtype=np.bool_)
     reach = radius - 1.5 * CELL
-    _block_segments(
-        blocked, np.ascontiguousarray(two_sided_segments, dtype=np.float64), reach, CELL
+    _mark_near_segments(
+        blocked, np.ascontiguousarray(two_sided_segments, dtype=np.float64), reach, CELL, False
     )
     _block_discs(
         blocked,
@@ -147,24 +149,17 @@ def free_space(
     )
     _block_flippers(blocked, np.ascontiguousarray(flippers, dtype=np.float64), reach, CELL)
     if drains is not None:  # a line the centre cannot cross: thick enough to close the grid
-        _block_segments(blocked, np.ascontiguousarray(drains, dtype=np.float64), CELL, CELL)
+        _mark_near_segments(
+            blocked, np.ascontiguousarray(drains, dtype=np.float64), CELL, CELL, False
+        )
     return _flood(blocked, *cell_of(start, blocked.shape))
 
 
-@njit(cache=True)
 def touches(reached, segments, reach, cell):
     """Whether a reached cell lies within ``reach`` of one of the segments."""
-    n_rows, n_cols = reached.shape
-    for k in range(segments.shape[0]):
-        x0, y0, x1, y1 = segments[k, 0], segments[k, 1], segments[k, 2], segments[k, 3]
-        r0, r1, c0, c1 = _cells_near(x0, y0, x1, y1, reach, cell, n_rows, n_cols)
-        for row in range(r0, r1):
-            for col in range(c0, c1):
-                if reached[row, col]:
-                    dx, dy = segment_offset((col + 0.5) * cell, (row + 0.5) * cell, x0, y0, x1, y1)
-                    if dx * dx + dy * dy <= reach * reach:
-                        return True
-    return False
+    near = np.zeros_like(reached)
+    _mark_near_segments(near, segments, reach, cell, True)
+    return bool((near & reached).any())
 
 
 def cell_of(point: tuple[float, float], shape: tuple[int, int]) -> tuple[int, int]:

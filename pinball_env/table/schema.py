@@ -456,24 +456,26 @@ def _materials(value: object, loc: _Loc) -> tuple[Material, ...]:
 
 
 def _wall(value: object, loc: _Loc, point: Parser) -> Wall:
-    wall = _record(
-        Wall,
-        value,
-        loc,
-        {
-            "name": _string,
-            "points": partial(_points, point=point, min_len=2, max_len=MAX_POINTS),
-            "closed": _flag,
-            "material": _string,
-            "one_sided": _flag,
-            "kick": _kick,
-            "score": _score,
-        },
-    )
+    parsers = {
+        "closed": _flag,
+        "material": _string,
+        "one_sided": _flag,
+        "kick": _kick,
+        "score": _score,
+    }
+    wall = _line(Wall, value, loc, point, MAX_POINTS, parsers)
     if wall.closed and len(wall.points) < 3:
         loc.fail(f"a closed polyline needs at least 3 points, got {len(wall.points)}")
     _check_lengths(wall.segments(), loc)
     return wall
+
+
+def _line(
+    cls: type, value: object, loc: _Loc, point: Parser, max_points: int, parsers: dict[str, Parser]
+) -> Any:
+    """A wall or a sensor: ``cls`` with a name, 2 to ``max_points`` points and ``parsers``' keys."""
+    points = partial(_points, point=point, min_len=2, max_len=max_points)
+    return _record(cls, value, loc, {"name": _string, "points": points, **parsers})
 
 
 def _flipper(value: object, loc: _Loc, point: Parser) -> Flipper:
@@ -512,17 +514,7 @@ def _flipper(value: object, loc: _Loc, point: Parser) -> Flipper:
 
 
 def _sensor(value: object, loc: _Loc, point: Parser) -> Sensor:
-    sensor = _record(
-        Sensor,
-        value,
-        loc,
-        {
-            "name": _string,
-            "points": partial(_points, point=point, min_len=2, max_len=2),
-            "drain": _flag,
-            "score": _score,
-        },
-    )
+    sensor = _line(Sensor, value, loc, point, 2, {"drain": _flag, "score": _score})
     _check_lengths([sensor.segment], loc)
     return sensor
 

@@ -578,6 +578,17 @@ def _print_flippers(report: dict[str, Any]) -> None:
         )
 
 
+def _label(ax: Any, title: str, ylabel: str, log: str) -> None:
+    """A panel against ball speed: its title, axis labels, log scales on the axes in ``log``
+    (``"x"``, ``"xy"``) and legend."""
+    for axis in log:
+        getattr(ax, f"set_{axis}scale")("log")
+    ax.set_xlabel("ball speed [m/s]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=7)
+
+
 def plot(report: dict[str, Any], path: Path) -> None:
     import matplotlib
 
@@ -592,11 +603,7 @@ def plot(report: dict[str, Any], path: Path) -> None:
         for engine, colour in zip(ENGINES, ("tab:blue", "tab:red"), strict=True):
             ax.plot(tunnel["speeds"], 100 * np.array(tunnel[target][engine]), style, color=colour,
                     marker="o", label=f"{engine}: {target}")  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_xlabel("ball speed [m/s]")
-    ax.set_ylabel("passed through [%]")
-    ax.set_title("Tunnelling: thin wall and flipper (substep 1/600 s)")
-    ax.legend(fontsize=7)
+    _label(ax, "Tunnelling: thin wall and flipper (substep 1/600 s)", "passed through [%]", "x")
 
     ax = axes[0, 1]
     rows = report["wall_bounces"]
@@ -606,12 +613,8 @@ def plot(report: dict[str, Any], path: Path) -> None:
         ax.scatter(speeds, errors, color=colour, s=12, label=engine)
     ax.axvline(LOW_SPEED, color="grey", ls=":")
     ax.axhline(100 * VELOCITY_TOLERANCE[0], color="grey", ls="--", label="tolerance")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("ball speed [m/s]")
-    ax.set_ylabel("bounce velocity error [% of speed]")
-    ax.set_title("Wall bounces vs analytic (all angles; exact shown at 1e-6)")
-    ax.legend(fontsize=7)
+    title = "Wall bounces vs analytic (all angles; exact shown at 1e-6)"
+    _label(ax, title, "bounce velocity error [% of speed]", "xy")
 
     ax = axes[1, 0]
     free = report["free_run"]

@@ -194,36 +194,38 @@ def parse_recording(data: Any, source: str = "recording") -> Recording:
         raise fail("table_sha256 must be 64 lowercase hex digits")
     if not top["games"]:
         raise fail("games is empty: the recording holds no game")
-    games = []
-    for index, raw in enumerate(top["games"]):
-        where = f"games[{index}]."
-        if not isinstance(raw, dict):
-            raise fail(f"games[{index}] must be an object, got {type(raw).__name__}")
-        game = _fields(
-            raw, {"seed": int, "actions": str, "score": int, "frames": int, "end": str}, fail, where
-        )
-        for key in ("seed", "score", "frames"):
-            if game[key] < 0:
-                raise fail(f"{where}{key} must be >= 0, got {game[key]}")
-        bad = re.search(r"[^0-3]", game["actions"])
-        if bad is not None:
-            raise fail(
-                f"{where}actions: {bad.group()!r} at step {bad.start()} is not an action "
-                "(one digit 0-3 per step)"
-            )
-        if not game["actions"]:
-            raise fail(f"{where}actions is empty")
-        if game["end"] not in ENDS:
-            raise fail(f"{where}end must be one of {ENDS}, got {game['end']!r}")
-        games.append(GameRecord(**game))
     return Recording(
         env_id=top["env_id"],
         options=options,
         max_episode_steps=steps,
         table_sha256=top["table_sha256"],
-        games=tuple(games),
+        games=tuple(_parse_game(raw, index, fail) for index, raw in enumerate(top["games"])),
         package_version=top["package_version"],
     )
+
+
+def _parse_game(raw: Any, index: int, fail: Callable[[str], RecordingError]) -> GameRecord:
+    """The :class:`GameRecord` of ``games[index]`` of a recording, after checking it."""
+    where = f"games[{index}]."
+    if not isinstance(raw, dict):
+        raise fail(f"games[{index}] must be an object, got {type(raw).__name__}")
+    game = _fields(
+        raw, {"seed": int, "actions": str, "score": int, "frames": int, "end": str}, fail, where
+    )
+    for key in ("seed", "score", "frames"):
+        if game[key] < 0:
+            raise fail(f"{where}{key} must be >= 0, got {game[key]}")
+    bad = re.search(r"[^0-3]", game["actions"])
+    if bad is not None:
+        raise fail(
+            f"{where}actions: {bad.group()!r} at step {bad.start()} is not an action "
+            "(one digit 0-3 per step)"
+        )
+    if not game["actions"]:
+        raise fail(f"{where}actions is empty")
+    if game["end"] not in ENDS:
+        raise fail(f"{where}end must be one of {ENDS}, got {game['end']!r}")
+    return GameRecord(**game)
 
 
 def _fields(

@@ -1,0 +1,36 @@
+"""The colours of rendered tables and their grayscale (BT.601 luma, in exact integers)."""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+Colour = Sequence[int] | np.ndarray  # (R, G, B), or (luma,) for the grayscale layer
+
+# Colours (R, G, B). Chosen so that in grayscale the ball is the brightest thing and the flippers
+# stand well clear of the background.
+BACKGROUND = (16, 20, 32)
+WALL = (165, 180, 205)
+ONE_SIDED = (240, 135, 45)
+KICKER = (225, 55, 65)
+POST = (40, 155, 140)
+SENSOR = (62, 72, 92)
+DRAIN = (92, 52, 62)
+FLIPPER = (250, 195, 60)
+BALL = (248, 248, 252)
+SCOREBOARD_TEXT = (250, 195, 60)
+
+# ITU-R BT.601 luma weights (as PIL's "L" mode and OpenCV use), in thousandths so that the
+# grayscale image is computed in exact integer arithmetic.
+LUMA_WEIGHTS = (299, 587, 114)
+
+
+def luminance(colour: Colour) -> np.ndarray:
+    """BT.601 luma of uint8 RGB values (last axis), rounded, as uint8 with that axis kept as 1."""
+    rgb = np.asarray(colour, dtype=np.uint32)
+    luma = (rgb * np.array(LUMA_WEIGHTS, dtype=np.uint32)).sum(axis=-1, keepdims=True)
+    return ((luma + 500) // 1000).astype(np.uint8)
+
+
+def rgb(colour: Colour) -> np.ndarray:
+    """``colour`` as a uint8 array, as the painters take it."""
+    return np.asarray(colour, dtype=np.uint8)

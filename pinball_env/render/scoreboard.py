@@ -1,0 +1,48 @@
+"""The scoreboard beside rendered frames: the score and the balls left, in a 3x5 pixel font."""
+
+import numpy as np
+
+from pinball_env.render.colours import BACKGROUND, SCOREBOARD_TEXT
+
+SCOREBOARD_WIDTH = 110  # [px]
+# A 3x5 pixel font (rows top to bottom, bits left to right) for the characters the scoreboard
+# shows, drawn in solid blocks.
+_FONT = {
+    "0": (7, 5, 5, 5, 7), "1": (2, 6, 2, 2, 7), "2": (7, 1, 7, 4, 7), "3": (7, 1, 7, 1, 7),
+    "4": (5, 5, 7, 1, 1), "5": (7, 4, 7, 1, 7), "6": (7, 4, 7, 5, 7), "7": (7, 1, 1, 1, 1),
+    "8": (7, 5, 7, 5, 7), "9": (7, 5, 7, 1, 7), "A": (2, 5, 7, 5, 5), "B": (6, 5, 6, 5, 6),
+    "C": (7, 4, 4, 4, 7), "E": (7, 4, 7, 4, 7), "L": (4, 4, 4, 4, 7), "O": (7, 5, 5, 5, 7),
+    "R": (6, 5, 6, 5, 5), "S": (7, 4, 7, 1, 7), " ": (0, 0, 0, 0, 0),
+}  # fmt: skip
+
+
+def text_mask(text: str, scale: int) -> np.ndarray:
+    """(5 scale, 4 scale len(text)) bool pixels of ``text`` in the scoreboard font (digits and
+    the letters of SCORE and BALLS), each font pixel a ``scale`` x ``scale`` block."""
+    rows = []
+    for row in range(5):
+        bits = []
+        for char in text:
+            code = _FONT[char][row]
+            bits.extend([bool(code & 4), bool(code & 2), bool(code & 1), False])
+        rows.append(bits)
+    return np.kron(np.array(rows, dtype=np.uint8), np.ones((scale, scale), np.uint8)) > 0
+
+
+def scoreboard(
+    height: int, score: int, balls_left: int, width: int = SCOREBOARD_WIDTH
+) -> np.ndarray:
+    """A (height, width, 3) uint8 strip showing the score and the balls left, as a machine's
+    display does beside the playfield."""
+    strip = np.empty((height, width, 3), dtype=np.uint8)
+    strip[...] = BACKGROUND
+    top = 10
+    for label, value in (("SCORE", score), ("BALLS", balls_left)):
+        for text, most in ((label, 4), (str(int(value)), 4)):
+            scale = max(1, min(most, (width - 10) // (4 * len(text))))
+            mask = text_mask(text, scale)
+            rows, cols = min(mask.shape[0], max(height - top, 0)), min(mask.shape[1], width - 5)
+            strip[top : top + rows, 5 : 5 + cols][mask[:rows, :cols]] = SCOREBOARD_TEXT
+            top += mask.shape[0] + 2 * scale
+        top += 12
+    return strip
