@@ -26,9 +26,8 @@ import yaml
 
 from pinball_env.extras import missing_message
 from pinball_env.game import check_playable
-from pinball_env.options import MAX_EPISODE_STEPS, PinballOptions
-from pinball_env.procgen import load_any_table
-from pinball_env.table import Table
+from pinball_env.options import GAME_FRAMES, PinballOptions
+from pinball_env.table import Table, load_any_table
 
 ALGORITHMS = ("ppo", "a2c", "dqn")
 POLICIES = ("MlpPolicy", "CnnPolicy")
@@ -68,7 +67,7 @@ class EnvConfig:
     @property
     def make_kwargs(self) -> dict[str, Any]:
         """The options for ``gym.make_vec``, the time limit filled in: 7200 frames."""
-        return {"max_episode_steps": None, "max_frames": MAX_EPISODE_STEPS, **self.kwargs}
+        return {"max_episode_steps": None, "max_frames": GAME_FRAMES, **self.kwargs}
 
 
 @dataclass(frozen=True)

@@ -15,11 +15,14 @@ from typing import Any
 from gymnasium.vector import AutoresetMode
 
 from pinball_env import checks
-from pinball_env.parallel import check_threads
+from pinball_env.sim.parallel import check_threads
 from pinball_env.table import Table
 
-# Two minutes of play at 60 frames per second: the registered time limit, in steps.
-MAX_EPISODE_STEPS = 7200
+# A game's time: two minutes of play at 60 frames per second [frames].
+GAME_FRAMES = 7200
+# The registered time limit [steps]: the game's time at frame_skip 1 (TimeLimit counts steps; the
+# max_frames option counts frames whatever the frame skip).
+MAX_EPISODE_STEPS = GAME_FRAMES
 # Most frames one step may hold an action for (a second at 60 Hz).
 MAX_FRAME_SKIP = 60
 # Rays a state observation may carry (see ``rays``).
@@ -214,6 +217,7 @@ def split_options(owner: str, kwargs: Mapping[str, Any]) -> tuple[PinballOptions
 __all__ = [
     "ACTION_TYPES",
     "DIFFICULTIES",
+    "GAME_FRAMES",
     "GENERATED",
     "MAX_EPISODE_STEPS",
     "MAX_FRAME_SKIP",

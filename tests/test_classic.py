@@ -5,12 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from pinball_env.backends import make_world
 from pinball_env.physics.columns import BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
 from pinball_env.physics.step import sensor_crossing
+from pinball_env.sim.backends import make_world
+from pinball_env.sim.world import World
 from pinball_env.table import load_table, table_from_dict
-from pinball_env.world import World
 
 CLASSIC = load_table("classic")
 R = CLASSIC.ball.radius

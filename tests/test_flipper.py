@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 from pinball_env.physics import capsule_distance, respond, sweep_capsule, sweep_flipper
 from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
+from pinball_env.sim.world import World
 from pinball_env.table import load_table, table_from_dict
-from pinball_env.world import World
 
 R = 0.0135
 L, RB, RT = 0.07, 0.0116, 0.007

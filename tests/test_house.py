@@ -18,7 +18,10 @@ def imported_modules(path: Path) -> set[str]:
             modules.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
             assert node.level == 0, f"{path.name}: a relative import hides where it points"
-            modules.add(node.module)
+            if node.module == "pinball_env":  # from pinball_env import checks: the submodule
+                modules.update(f"pinball_env.{alias.name}" for alias in node.names)
+            else:
+                modules.add(node.module)
     return modules
 
 
@@ -35,6 +38,36 @@ def test_the_table_imports_only_physics_and_itself(path):
     for module in imported_modules(path):
         if module.startswith("pinball_env"):
             assert module.startswith(("pinball_env.physics", "pinball_env.table")), module
+
+
+# What each floor above the table may import from the package (besides itself), bottom up: the
+# arrows run agents -> wrappers/envs -> observation/game -> sim -> table/procgen -> physics.
+FLOORS = {
+    "sim": ("physics", "table", "extras"),
+    "procgen": ("physics", "table", "sim"),  # its playability check plays balls on a World
+    "render": ("physics", "table", "sim", "extras"),
+    "options.py": ("checks", "table", "procgen", "sim"),
+    "game": ("physics", "table", "sim", "options", "checks"),
+    "observation.py": ("physics", "table", "sim", "game", "render"),
+    "envs": ("physics", "table", "sim", "procgen", "game", "options", "checks", "observation",
+             "render"),
+}  # fmt: skip
+
+
+def floor_files(floor: str) -> list[Path]:
+    path = PACKAGE / floor
+    return [path] if path.suffix == ".py" else sorted(path.rglob("*.py"))
+
+
+@pytest.mark.parametrize("floor", sorted(FLOORS))
+def test_each_floor_imports_only_from_below_it(floor):
+    own = floor.removesuffix(".py")
+    allowed = {f"pinball_env.{name}" for name in (own, *FLOORS[floor])}
+    for path in floor_files(floor):
+        for module in imported_modules(path):
+            if module.startswith("pinball_env.") or module == "pinball_env":
+                top = ".".join(module.split(".")[:2])
+                assert top in allowed, f"{path.relative_to(PACKAGE)} imports {module}"
 
 
 def test_importing_the_package_loads_no_agent_library_and_no_tool():

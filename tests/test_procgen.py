@@ -24,8 +24,8 @@ from pinball_env.procgen import (
     playability,
     table_name,
 )
+from pinball_env.sim.world import World
 from pinball_env.table import TableError, dump_table, load_table, table_from_dict, table_to_dict
-from pinball_env.world import World
 
 seeds = st.integers(0, 2**40)
 difficulties = st.sampled_from(procgen.DIFFICULTIES)

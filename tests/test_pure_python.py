@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pinball_env.sim.world import World
 from pinball_env.table import load_table
-from pinball_env.world import World
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -16,7 +16,7 @@ TRACE_SCRIPT = """
 import sys
 import numpy as np
 from pinball_env.table import load_table
-from pinball_env.world import World
+from pinball_env.sim.world import World
 world = World(load_table("box"), n_envs=3)
 world.place_ball(1, (0.1, 0.95), (4.0, -2.5))
 world.place_ball(2, (0.4, 0.3), (-30.0, 41.0))

@@ -32,9 +32,9 @@ from pinball_env.physics.columns import (
     FLIPPER_UP_ANGLE,
 )
 from pinball_env.render import SCOREBOARD_WIDTH, render_size, text_mask
+from pinball_env.sim.world import World
 from pinball_env.table import TableError, builtin_tables_dir, load_table, table_from_dict
 from pinball_env.table.model import inside
-from pinball_env.world import World
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -114,7 +114,7 @@ def test_a_kicker_must_lose_energy_at_a_bounce():
 ABSURD_STATE_SCRIPT = """
 import numpy as np
 from pinball_env.table import load_table
-from pinball_env.world import World
+from pinball_env.sim.world import World
 world = World(load_table("classic"))
 world.step(np.array([[True, False]]))  # the left flipper swings
 for speed in (1e6, 1e12, 1e300, float("inf")):

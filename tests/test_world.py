@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.sim.world import CONTACT_CAPACITY, World
 from pinball_env.table import builtin_tables_dir, load_table, table_from_dict
-from pinball_env.world import CONTACT_CAPACITY, World
 
 RADIUS = 0.0135
 SKIN = 1e-6

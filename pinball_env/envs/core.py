@@ -14,9 +14,8 @@ from pinball_env.envs.layouts import Layouts, frame_size
 from pinball_env.game import DISCRETE_BUTTONS, Game
 from pinball_env.observation import TableRenderers, make_observer
 from pinball_env.options import PinballOptions
-from pinball_env.procgen import load_any_table
 from pinball_env.render import FrameRenderer, Renderer, render_size, scoreboard
-from pinball_env.table import BUTTONS, Table
+from pinball_env.table import BUTTONS, Table, load_any_table
 
 
 class PinballCore:
@@ -151,6 +150,48 @@ class PinballCore:
         if self.layouts is not None:
             self.layouts.close()
         self.game.world.threads.close()
+
+
+class CoreAttributes:
+    """The attributes both env shells read from their :class:`PinballCore` (``self.core``)."""
+
+    core: PinballCore
+
+    @property
+    def game(self) -> Game:
+        """The rules and physics of every env."""
+        return self.core.game
+
+    @property
+    def layouts(self) -> Layouts | None:
+        """The generated-table source (``table="generated"``), else None."""
+        return self.core.layouts
+
+    @property
+    def obs_type(self) -> str:
+        return self.core.options.obs_type
+
+    @property
+    def action_type(self) -> str:
+        return self.core.options.action_type
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        return self.core.options.image_size
+
+    @property
+    def rays(self) -> int:
+        return self.core.options.rays
+
+    @property
+    def reward_scale(self) -> float:
+        """Reward per point (the game's)."""
+        return self.game.reward_scale
+
+    @property
+    def height_shaping(self) -> float:
+        """Weight of the height shaping term (the game's)."""
+        return self.game.height_shaping
 
 
 def full_size_renderer(table: Table) -> Renderer:

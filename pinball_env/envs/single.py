@@ -8,15 +8,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.error import ResetNeeded
 
-from pinball_env.envs.core import PinballCore
-from pinball_env.envs.layouts import Layouts
-from pinball_env.game import DISCRETE_BUTTONS, Game, InvalidActions
+from pinball_env.envs.core import CoreAttributes, PinballCore
+from pinball_env.game import DISCRETE_BUTTONS, InvalidActions
 from pinball_env.options import PinballOptions
 from pinball_env.render import Window
 from pinball_env.table import BUTTONS, Table
 
 
-class PinballEnv(gym.Env):
+class PinballEnv(CoreAttributes, gym.Env):
     """A real flipper-and-ball pinball table; the agent works the two flipper buttons.
 
     ## Description
@@ -293,47 +292,11 @@ class PinballEnv(gym.Env):
     # --- what the env is playing -------------------------------------------------------------
 
     @property
-    def game(self) -> Game:
-        """The rules and physics (a ``Game`` of one env)."""
-        return self.core.game
-
-    @property
     def table(self) -> Table:
         """The table of the game (of the game being played, with generated tables)."""
         return self.game.world.table_of(0)
 
     @property
-    def layouts(self) -> Layouts | None:
-        """The generated-table source (``table="generated"``), else None."""
-        return self.core.layouts
-
-    @property
     def layout(self) -> int | None:
         """The layout of the game (generated tables), else None."""
         return None if self.core.layout is None else int(self.core.layout[0])
-
-    @property
-    def obs_type(self) -> str:
-        return self.options.obs_type
-
-    @property
-    def action_type(self) -> str:
-        return self.options.action_type
-
-    @property
-    def image_size(self) -> tuple[int, int]:
-        return self.options.image_size
-
-    @property
-    def rays(self) -> int:
-        return self.options.rays
-
-    @property
-    def reward_scale(self) -> float:
-        """Reward per point (the game's)."""
-        return self.game.reward_scale
-
-    @property
-    def height_shaping(self) -> float:
-        """Weight of the height shaping term (the game's)."""
-        return self.game.height_shaping

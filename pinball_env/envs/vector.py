@@ -18,9 +18,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from pinball_env.checks import is_int
-from pinball_env.envs.core import PinballCore
-from pinball_env.envs.layouts import Layouts
-from pinball_env.game import Game, InvalidActions
+from pinball_env.envs.core import CoreAttributes, PinballCore
+from pinball_env.game import InvalidActions
 from pinball_env.options import split_options
 from pinball_env.table import Table
 
@@ -46,7 +45,7 @@ class EnvAttribute:
     set: Callable[[int, Any], None] | None = None
 
 
-class PinballVectorEnv(VectorEnv):
+class PinballVectorEnv(CoreAttributes, VectorEnv):
     """``num_envs`` games of ``Pinball-v0`` in one batch (see ``PinballEnv`` for the game,
     its spaces, rewards and infos).
 
@@ -264,36 +263,14 @@ class PinballVectorEnv(VectorEnv):
         return tuple(self._seeds)
 
     @property
-    def game(self) -> Game:
-        """The rules and physics of every env."""
-        return self.core.game
-
-    @property
     def table(self) -> Table:
         """The table the envs were made with (``get_attr("table")`` gives each env's)."""
         return self.game.table
 
     @property
-    def layouts(self) -> Layouts | None:
-        """The generated-table source (``table="generated"``), else None."""
-        return self.core.layouts
-
-    @property
     def layout(self) -> np.ndarray | None:
         """(num_envs,) each env's layout (generated tables), else None."""
         return self.core.layout
-
-    @property
-    def obs_type(self) -> str:
-        return self.options.obs_type
-
-    @property
-    def image_size(self) -> tuple[int, int]:
-        return self.options.image_size
-
-    @property
-    def rays(self) -> int:
-        return self.options.rays
 
     # --- attributes per env (see the class docstring) -----------------------------------------
 

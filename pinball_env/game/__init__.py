@@ -4,7 +4,6 @@ score, reward, infos) and the compiled loop that plays a step's frames (``play.p
 from pinball_env.game.rules import (
     BALL_SEARCH_TIME,
     DISCRETE_BUTTONS,
-    MAX_FRAME_SKIP,
     MAX_RUN_ON_FRAMES,
     RESET_OPTIONS,
     Game,
@@ -13,7 +12,7 @@ from pinball_env.game.rules import (
     check_playable,
     discrete_action,
 )
-from pinball_env.options import ACTION_TYPES
+from pinball_env.options import ACTION_TYPES, MAX_FRAME_SKIP
 
 __all__ = [
     "ACTION_TYPES",

@@ -34,8 +34,17 @@ class Rules(NamedTuple):
 
 
 class StepProgress(NamedTuple):
-    """Where each env is in the current step: the compiled loop hands it back to Python for a
-    launch and takes it up again where it stopped."""
+    """Where each env is in the current step: the compiled loop hands it back to Python and
+    takes it up again where it stopped.
+
+    Why the hand-back stays: numba takes NumPy ``Generator`` objects (a typed list of them too)
+    and draws bitwise what NumPy draws (checked on ``uniform``), so the loop could launch balls
+    itself; but the pymunk backend and the ``on_frame`` hook need each frame's physics handed to
+    Python anyway, so the stages serve them whatever launches do, and the envs' generators are
+    Python objects that users replace (``reset(seed=...)``, ``set_attr("np_random", ...)``), which
+    a typed list would have to follow. A launch comes back once a ball, which costs nothing that
+    a benchmark sees.
+    """
 
     stage: np.ndarray  # (N,) int64: what comes next (NEW_STEP ... STEP_DONE)
     frames: np.ndarray  # (N,) int64: frames played in this step

@@ -14,7 +14,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from pinball_env.backends import make_world
 from pinball_env.game.play import (
     AFTER_PHYSICS,
     NEW_STEP,
@@ -24,11 +23,12 @@ from pinball_env.game.play import (
     new_progress,
     play_frames,
 )
-from pinball_env.options import MAX_FRAME_SKIP, PinballOptions
+from pinball_env.options import PinballOptions
 from pinball_env.physics import State
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.sim.backends import make_world
+from pinball_env.sim.world import compiled_entry
 from pinball_env.table import BUTTONS, TEST_TABLES, Table, check_ball_state
-from pinball_env.world import compiled_entry
 
 # A discrete action is the buttons held as bits: bit i is button BUTTONS[i] (0 none, 1 left,
 # 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's buttons.
@@ -404,17 +404,3 @@ def _copy_into(source: tuple, target: tuple) -> None:
             _copy_into(src, dst)
         else:
             np.copyto(dst, src)
-
-
-__all__ = [
-    "BALL_SEARCH_TIME",
-    "DISCRETE_BUTTONS",
-    "MAX_FRAME_SKIP",
-    "MAX_RUN_ON_FRAMES",
-    "RESET_OPTIONS",
-    "Game",
-    "GameState",
-    "InvalidActions",
-    "check_playable",
-    "discrete_action",
-]

@@ -39,8 +39,8 @@ import numpy as np
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
 from pinball_env.physics import first_sensor
+from pinball_env.sim.world import World
 from pinball_env.table import load_table
-from pinball_env.world import World
 
 STARTUP = (
     "import time; start = time.perf_counter(); import gymnasium as gym, pinball_env; "

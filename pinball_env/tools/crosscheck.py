@@ -1,7 +1,7 @@
 """Cross-check our swept physics against pymunk: ``python -m pinball_env.tools.crosscheck``.
 
 Runs the same scenarios on both engines (the same validated table object, built by
-``pinball_env.backends.make_world``) and writes a report to ``--out`` (default
+``pinball_env.sim.backends.make_world``) and writes a report to ``--out`` (default
 ``outputs/crosscheck``): a table on the terminal, ``crosscheck.json`` and ``crosscheck.png``.
 
 Scenarios: single-wall bounces over a grid of angles and speeds; segment-end (corner) hits;
@@ -36,11 +36,11 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env.backends import make_world
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
+from pinball_env.sim.backends import make_world
+from pinball_env.sim.world import World
 from pinball_env.table import BUTTONS, Table, load_table, table_from_dict, table_to_dict
-from pinball_env.world import World
 
 ENGINES = ("swept", "pymunk")
 RADIUS = 0.0135

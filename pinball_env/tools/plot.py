@@ -19,8 +19,8 @@ import numpy as np
 from pinball_env.extras import require
 from pinball_env.physics import capsule_face_normal
 from pinball_env.procgen import DIFFICULTIES, generate_table, load_any_table
+from pinball_env.sim.world import World
 from pinball_env.table import Flipper, Table
-from pinball_env.world import World
 
 WALL_COLOUR = "#1d3557"
 ONE_SIDED_COLOUR = "#e76f51"

@@ -1,7 +1,7 @@
 """Physics backends behind the World interface: ``"swept"`` (ours) and ``"pymunk"``."""
 
+from pinball_env.sim.world import World
 from pinball_env.table import Table
-from pinball_env.world import World
 
 PHYSICS = ("swept", "pymunk")
 
@@ -14,7 +14,7 @@ def make_world(
     if physics == "swept":
         return World(table, n_envs, num_threads)
     if physics == "pymunk":
-        from pinball_env.backends.pymunk_backend import PymunkWorld  # pymunk is an extra
+        from pinball_env.sim.backends.pymunk_backend import PymunkWorld  # pymunk is an extra
 
         return PymunkWorld(table, n_envs)
     raise ValueError(f"physics must be one of {', '.join(map(repr, PHYSICS))}, got {physics!r}")

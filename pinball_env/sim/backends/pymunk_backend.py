@@ -1,6 +1,6 @@
 """The same table built in pymunk (Chipmunk2D), behind the World interface, for cross-checks.
 
-``PymunkWorld`` is a :class:`~pinball_env.world.World` whose frame is simulated by pymunk
+``PymunkWorld`` is a :class:`~pinball_env.sim.world.World` whose frame is simulated by pymunk
 instead of the swept kernel: one ``pymunk.Space`` per env, built from the same validated table.
 
 - walls are static ``Segment`` shapes, posts and bumpers static ``Circle`` shapes; a one-sided
@@ -52,8 +52,8 @@ from pinball_env.physics.step import (
     log_contact,
     record_crossings,
 )
+from pinball_env.sim.world import World
 from pinball_env.table import Table
-from pinball_env.world import World
 
 pymunk = require("pymunk")
 
