@@ -70,8 +70,16 @@ class EnvConfig:
         return {"max_episode_steps": None, "max_frames": GAME_FRAMES, **self.kwargs}
 
 
+class _RunConfig:
+    """What both kinds of run config share."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The config as plain data (what ``config.yaml`` holds)."""
+        return dataclasses.asdict(self)  # type: ignore[call-overload]
+
+
 @dataclass(frozen=True)
-class TrainConfig:
+class TrainConfig(_RunConfig):
     """A training run: algorithm, policy, hyperparameters, env, budget and bookkeeping."""
 
     algo: str = "ppo"
@@ -119,9 +127,6 @@ class TrainConfig:
     notes: str = ""
     """Free text: what this config is for, what shaping it uses and why."""
 
-    def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
-
     @property
     def label(self) -> str:
         """The algorithm as run folders name it."""
@@ -140,7 +145,7 @@ class TrainConfig:
 
 
 @dataclass(frozen=True)
-class RllibConfig:
+class RllibConfig(_RunConfig):
     """A Ray RLlib run (``agents.rllib``): PPO on RLlib's current API stack, its env runners
     stepping the native vector env."""
 
@@ -175,9 +180,6 @@ class RllibConfig:
     """First seed of evaluation games; training never uses seeds from here on."""
     notes: str = ""
     """Free text: what this config is for."""
-
-    def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
 
     @property
     def label(self) -> str:
