@@ -1,8 +1,9 @@
 """A pinball table for reinforcement learning, moved by swept (continuous) collision.
 
-Importing the package registers ``Pinball-v0`` (the classic table, or any other) and
-``PinballProcgen-v0`` (a generated table each game, the table source ``"generated"``) with
-Gymnasium::
+Importing the package registers ``Pinball-v0`` (the classic table, or any other),
+``Pinball-v1`` (the whole cabinet: the player's plunger, the nudge and the tilt, on
+``classic_v1``) and ``PinballProcgen-v0`` (a generated table each game, the table source
+``"generated"``) with Gymnasium::
 
     import gymnasium as gym
     import pinball_env  # noqa: F401
@@ -28,6 +29,16 @@ register(
     entry_point="pinball_env.env:PinballEnv",
     vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
+)
+
+# The whole cabinet: the classic layout with the player's plunger, the nudge and the tilt, and
+# the full action set (32 discrete actions).
+register(
+    id="Pinball-v1",
+    entry_point="pinball_env.env:PinballEnv",
+    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    max_episode_steps=MAX_EPISODE_STEPS,
+    kwargs={"table": "classic_v1"},
 )
 
 # The same envs on a generated table each game (the table source "generated").

@@ -15,7 +15,7 @@ from gymnasium import spaces
 from numba import njit
 
 from pinball_env.game import Game
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, CABINET_VX, CABINET_X
 from pinball_env.physics.rays import cast_all_rays
 from pinball_env.render import Renderer
 from pinball_env.sim.tables import flipper_numbers
@@ -26,6 +26,10 @@ from pinball_env.table import Table
 MAX_OBS_SPEED = 20.0
 # Renderers kept per table (a renderer holds its table's static layer).
 CACHED_RENDERERS = 512
+# The cabinet's rows clip its offset to +-MAX_CABINET_OFFSET [m] and its velocity to
+# +-MAX_CABINET_SPEED [m/s]: a shove moves a real cabinet a few millimetres at a few dm/s.
+MAX_CABINET_OFFSET = 0.02
+MAX_CABINET_SPEED = 1.0
 
 
 class StateObserver:
@@ -59,6 +63,13 @@ class StateObserver:
                                   [0.0, 0.0]])  # fmt: skip
             high = np.concatenate([[table.width, table.height, speeds[1], speeds[1]], swing,
                                    top_speed, [1.0, balls]])  # fmt: skip
+        if self.game.cabinet:
+            stroke = 1.0 if self.normalised else table.plunger.stroke
+            offset, speed = MAX_CABINET_OFFSET, MAX_CABINET_SPEED
+            low = np.concatenate([low, [0.0, 0.0, -offset, -offset, -speed, -speed, 0.0, 0.0]])
+            high = np.concatenate(
+                [high, [stroke, 1.0, offset, offset, speed, speed, table.tilt.warnings + 1, 1.0]]
+            )
         low = np.concatenate([low, np.zeros(self.rays)]).astype(np.float32)
         high = np.concatenate([high, np.ones(self.rays)]).astype(np.float32)
         return low, high
@@ -67,9 +78,10 @@ class StateObserver:
         """(n_envs, features) float32."""
         world, tables = self.game.world, self.game.world.tables
         state = world.state
+        game = self.game.state
         obs = state_observation(
-            state.balls, state.flipper_angle, state.flipper_omega, state.active,
-            self.game.state.balls_left, tables.flipper_rest, tables.flipper_up_sign,
+            state.balls, state.flipper_angle, state.flipper_omega, self.game.in_play,
+            game.balls_left, tables.flipper_rest, tables.flipper_up_sign,
         )  # fmt: skip
         if self.normalised:
             n = tables.flipper_swing.shape[1]
@@ -77,6 +89,13 @@ class StateObserver:
             obs[:, 1] /= tables.height
             obs[:, 4 : 4 + n] /= tables.flipper_swing
             obs[:, 4 + n : 4 + 2 * n] /= tables.flipper_top_speed
+        if self.game.cabinet:
+            stroke = self.game.table.plunger.stroke if self.normalised else 1.0
+            cabinet = cabinet_observation(
+                game.plunger_pull / stroke, game.on_plunger, state.cabinet, game.tilt_warnings,
+                state.tilted,
+            )  # fmt: skip
+            obs = np.concatenate([obs, cabinet], axis=1)
         if self.rays:
             args = (state.balls, tables.geometries(), state.flipper_angle, self.rays,
                     self._ray_distances)  # fmt: skip
@@ -119,7 +138,7 @@ class ImageObserver:
         state = world.state
         if not world.tables.varied:
             return self.renderers(world.table).frames(
-                state.balls, state.active, state.flipper_angle, grayscale=self.grayscale,
+                state.balls, self.game.in_play, state.flipper_angle, grayscale=self.grayscale,
                 threads=world.threads,
             )  # fmt: skip
         frames = []
@@ -127,7 +146,7 @@ class ImageObserver:
             one = slice(env, env + 1)
             renderer = self.renderers(world.table_of(env))
             frames.append(renderer.frames(
-                state.balls[one], state.active[one], state.flipper_angle[one],
+                state.balls[one], self.game.in_play[one], state.flipper_angle[one],
                 grayscale=self.grayscale,
             ))  # fmt: skip
         return np.concatenate(frames)
@@ -165,12 +184,34 @@ def state_observation(balls, flipper_angle, flipper_omega, active, balls_left, r
     return obs
 
 
+@njit(cache=True)
+def cabinet_observation(pull, on_plunger, cabinet, warnings, tilted):
+    """The cabinet's rows of the state observation of every env, float32: the plunger's pull,
+    the ball waiting on it, the cabinet's offset and velocity (clipped), the tilt warnings and
+    the tilt."""
+    obs = np.empty((pull.shape[0], 8), dtype=np.float32)
+    for env in range(pull.shape[0]):
+        obs[env, 0] = pull[env]
+        obs[env, 1] = on_plunger[env]
+        for i in range(2):
+            offset = cabinet[env, CABINET_X + i]
+            speed = cabinet[env, CABINET_VX + i]
+            obs[env, 2 + i] = min(max(offset, -MAX_CABINET_OFFSET), MAX_CABINET_OFFSET)
+            obs[env, 4 + i] = min(max(speed, -MAX_CABINET_SPEED), MAX_CABINET_SPEED)
+        obs[env, 6] = warnings[env]
+        obs[env, 7] = tilted[env]
+    return obs
+
+
 __all__ = [
+    "MAX_CABINET_OFFSET",
+    "MAX_CABINET_SPEED",
     "MAX_OBS_SPEED",
     "ImageObserver",
     "Observer",
     "StateObserver",
     "TableRenderers",
+    "cabinet_observation",
     "make_observer",
     "state_observation",
 ]

@@ -11,11 +11,11 @@ import numpy as np
 from gymnasium import spaces
 
 from pinball_env.envs.layouts import Layouts, frame_size
-from pinball_env.game import DISCRETE_BUTTONS, Game
+from pinball_env.game import Game
 from pinball_env.observation import TableRenderers, make_observer
 from pinball_env.options import PinballOptions
 from pinball_env.render import FrameRenderer, Renderer, render_size, scoreboard
-from pinball_env.table import BUTTONS, Table, load_any_table
+from pinball_env.table import Table, load_any_table
 
 
 class PinballCore:
@@ -50,9 +50,9 @@ class PinballCore:
             self.game, options.obs_type, options.image_size, options.generated, options.rays
         )
         if options.action_type == "discrete":
-            self.action_space: spaces.Space = spaces.Discrete(len(DISCRETE_BUTTONS))
+            self.action_space: spaces.Space = spaces.Discrete(len(self.game.discrete_buttons))
         else:
-            self.action_space = spaces.MultiBinary(len(BUTTONS))
+            self.action_space = spaces.MultiBinary(len(self.game.button_names))
         self.steps_per_second = table.simulation.frame_rate / options.frame_skip
         # The frames render() shows: of one size for every layout of generated tables.
         if options.generated:

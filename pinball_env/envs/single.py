@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 
 from pinball_env.envs.core import CoreAttributes, PinballCore
-from pinball_env.game import DISCRETE_BUTTONS, InvalidActions
+from pinball_env.game import DISCRETE_BUTTONS, InvalidActions, action_meanings
 from pinball_env.options import PinballOptions
 from pinball_env.render import Window
 from pinball_env.table import BUTTONS, Table
@@ -288,6 +288,15 @@ class PinballEnv(CoreAttributes, gym.Env):
                 else:
                     mapping[codes] = pressed.astype(np.int8)
         return mapping
+
+    def get_action_meanings(self) -> list[str]:
+        """The name of every discrete action, as ALE's envs have it: ``NOOP``, ``LEFT_FLIPPER``,
+        ``RIGHT_FLIPPER``, ``BOTH_FLIPPERS`` and, on a table with the cabinet (``Pinball-v1``),
+        their combinations with ``PLUNGER`` and one of ``NUDGE_LEFT``, ``NUDGE_RIGHT``,
+        ``NUDGE_UP``, joined by ``_`` (action ``a``: flippers ``a & 3``, plunger bit 2, nudge
+        ``a >> 3``). With ``action_type="multibinary"`` these are the discrete actions'
+        names all the same; the buttons are ``game.button_names``."""
+        return action_meanings(self.game.cabinet)
 
     # --- what the env is playing -------------------------------------------------------------
 

@@ -7,13 +7,21 @@ physics backend other than the swept kernel), and takes it up again where it sto
 (:class:`StepProgress`). ``Game.step`` drives it.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from pinball_env.physics import first_flipper
-from pinball_env.physics.columns import BALL_X, BALL_Y
+from pinball_env.physics.columns import (
+    BALL_VY,
+    BALL_X,
+    BALL_Y,
+    BOB_TOUCHES,
+    CABINET_SHOVE_X,
+    CABINET_SHOVE_Y,
+)
 from pinball_env.physics.step import step_ball
 
 
@@ -31,6 +39,20 @@ class Rules(NamedTuple):
     search_frames: int  # still frames before a ball search
     radius: float  # the ball's [m]
     scores: np.ndarray  # (N, elements) int64: points per element id
+    # The cabinet (tables with one; see ``Game`` and ``physics.cabinet``).
+    cabinet: bool  # the table has the player's plunger, the nudge and the tilt
+    plunger_x: float  # ball centre on the plunger [m]
+    plunger_y: float
+    stroke: float  # the plunger's pull back [m]
+    pull_step: float  # its pull in a frame [m]
+    pull_speeds: tuple[float, float]  # launch speed at the shortest pull and the whole stroke
+    nudge_impulse: float  # [N s]
+    nudge_frames: int  # shortest time between two shoves [frames]
+    warnings: int  # ring touches that warn; the next tilts
+    warning_frames: int  # a warning is forgotten after this long without another [frames]
+    skill_sensors: np.ndarray  # (N,) int64: element id of the skill-shot rollover (-1: none)
+    skill_bonus: int  # [points]
+    skill_frames: int  # how long the skill shot stays lit after a plunge [frames]
 
 
 class StepProgress(NamedTuple):
@@ -56,6 +78,8 @@ class StepProgress(NamedTuple):
     frame_drained: np.ndarray  # (N,) bool: the frame under way drained a ball
     launch: np.ndarray  # (N,) bool: waits for a ball off the plunger before it goes on
     finite: np.ndarray  # (N,) bool: the ball state stayed finite
+    skill_shot: np.ndarray  # (N,) bool: the skill shot was made in the step
+    tilt: np.ndarray  # (N,) bool: the machine tilted in the step
 
 
 # A step's stages, per env: its start, then per frame: the next frame chosen (or the step
@@ -66,8 +90,9 @@ NEW_STEP, NEXT_FRAME, PHYSICS, AFTER_PHYSICS, SEARCH, CLOSE_FRAME, STEP_DONE = r
 
 @njit(cache=True, nogil=True)
 def play_frames(
-    geometries, settings, state, scratch, progress, rules, commands, swept, start, stop
-):
+    geometries, settings, state, scratch, progress, rules, commands, cabinet_buttons, swept,
+    start, stop,
+):  # fmt: skip
     """Take the step of envs ``start`` to ``stop`` on from where each is (``progress.stage``),
     each env's frames one after another, to its end (STEP_DONE), or to where it needs a launch
     (``progress.launch``; Python draws it from the env's stream), or, unless ``swept``, the
@@ -80,6 +105,14 @@ def play_frames(
     released while the ball is above ``skip_heights``), the physics, the points scored, a
     drained ball (the next one is launched), the ball search (BALL_SEARCH_TIME), the frame's
     reward. Envs are independent: threads may share the range.
+
+    With the cabinet (``rules.cabinet``; ``cabinet_buttons`` (N, 4): plunger, nudge left,
+    right, up) a frame also pulls the plunger while its button is held and fires a ball
+    waiting on it when let go, shoves the cabinet for a nudge (at most once per
+    ``nudge_frames``), scores the skill shot, counts the plumb bob's touches of its ring as
+    warnings and tilts the machine past the allowed ones (flippers and kickers dead, no
+    points, the ball lost), serves the next ball onto the plunger to wait for the player, and
+    catches a ball that falls back down the shooter lane onto the plunger.
 
     Written out in one body, as ``step_ball``: numba counts a reference for every array taken
     out of a record, and taking them out once per call instead of once per helper and frame
@@ -95,6 +128,14 @@ def play_frames(
     height_before = progress.height_before
     frame_points, frame_drained = progress.frame_points, progress.frame_drained
     launch, finite = progress.launch, progress.finite
+    cabinet, tilted, skill_shot, tilt = (
+        world.cabinet,
+        world.tilted,
+        progress.skill_shot,
+        progress.tilt,
+    )
+    pull, on_plunger, nudge_wait = state.plunger_pull, state.on_plunger, state.nudge_wait
+    warnings, warning_age, skill_left = state.tilt_warnings, state.warning_age, state.skill_left
     scores, heights, skip_heights = rules.scores, rules.heights, rules.skip_heights
     r2 = rules.radius * rules.radius
     per_env = len(geometries) > 1  # else every env plays the one table
@@ -111,6 +152,7 @@ def play_frames(
                 total[env] = 0.0
                 drained[env] = False
                 finite[env] = True
+                skill_shot[env] = tilt[env] = False
                 stage[env] = NEXT_FRAME
             elif now == NEXT_FRAME:
                 k = frames[env]
@@ -124,7 +166,33 @@ def play_frames(
                     stage[env] = STEP_DONE
                     continue
                 for j in range(flipper_command.shape[1]):
-                    flipper_command[env, j] = held and commands[env, j]
+                    flipper_command[env, j] = held and commands[env, j] and not tilted[env]
+                if rules.cabinet:
+                    # The plunger: pulled back while its button is held, fired when let go.
+                    if held and cabinet_buttons[env, 0]:
+                        pull[env] = min(pull[env] + rules.pull_step, rules.stroke)
+                    elif pull[env] > 0.0:
+                        if on_plunger[env]:
+                            low, high = rules.pull_speeds
+                            speed = low + (high - low) * pull[env] / rules.stroke
+                            put_ball(balls[env], rules.plunger_x, rules.plunger_y, speed)
+                            active[env] = True
+                            on_plunger[env] = False
+                            skill_left[env] = rules.skill_frames
+                        pull[env] = 0.0
+                    # The nudge: a shove along the pressed directions, once per nudge_frames.
+                    if nudge_wait[env] > 0:
+                        nudge_wait[env] -= 1
+                    if held and nudge_wait[env] == 0:
+                        dx = (1.0 if cabinet_buttons[env, 2] else 0.0) - (
+                            1.0 if cabinet_buttons[env, 1] else 0.0
+                        )
+                        dy = 1.0 if cabinet_buttons[env, 3] else 0.0
+                        length = math.sqrt(dx * dx + dy * dy)
+                        if length > 0.0:
+                            cabinet[env, CABINET_SHOVE_X] = rules.nudge_impulse * dx / length
+                            cabinet[env, CABINET_SHOVE_Y] = rules.nudge_impulse * dy / length
+                            nudge_wait[env] = rules.nudge_frames
                 height_before[env] = balls[env, BALL_Y]
                 stage[env] = PHYSICS
             elif now == PHYSICS:
@@ -139,25 +207,49 @@ def play_frames(
                 scored = 0
                 for element in range(hits.shape[1]):
                     scored += hits[env, element] * scores[env, element]
+                if rules.cabinet:
+                    scored = cabinet_rules(
+                        env, scored, rules, hits, cabinet, tilted, active, on_plunger,
+                        warnings, warning_age, skill_left, skill_shot, tilt, still_frames,
+                    )  # fmt: skip
                 score[env] += scored
-                gone = balls_left[env] > 0 and not active[env]
+                gone = balls_left[env] > 0 and not active[env] and not on_plunger[env]
                 if gone:
                     drain_height[env] = balls[env, BALL_Y]
                     balls_left[env] -= 1
                 frame_points[env] = scored
                 frame_drained[env] = gone
                 launch[env] = gone and balls_left[env] > 0
+                if rules.cabinet:
+                    ball = balls[env]
+                    caught = (
+                        active[env]
+                        and abs(ball[BALL_X] - rules.plunger_x) < rules.radius
+                        and ball[BALL_Y] <= rules.plunger_y
+                        and ball[BALL_VY] <= 0.0
+                    )
+                    if launch[env] or caught:
+                        # The next ball, or one fallen back down the shooter lane, waits on the
+                        # plunger for the player.
+                        put_ball(ball, rules.plunger_x, rules.plunger_y, 0.0)
+                        active[env] = False
+                        on_plunger[env] = True
+                        skill_left[env] = 0
+                    if launch[env]:  # a new ball: the tilt is over
+                        launch[env] = False
+                        tilted[env] = False
+                        warnings[env] = warning_age[env] = 0
                 stage[env] = SEARCH
             elif now == SEARCH:  # a ball that has not moved a radius for long is served again
                 dx = balls[env, BALL_X] - anchor[env, 0]
                 dy = balls[env, BALL_Y] - anchor[env, 1]
-                if not active[env] or dx * dx + dy * dy > r2:
+                if (not active[env] and not on_plunger[env]) or dx * dx + dy * dy > r2:
                     anchor[env, 0] = balls[env, BALL_X]
                     anchor[env, 1] = balls[env, BALL_Y]
                     still_frames[env] = 0
-                else:
+                else:  # (a tilted ball is given up instead, see cabinet_rules)
                     still_frames[env] += 1
-                    launch[env] = still_frames[env] >= rules.search_frames
+                    launch[env] = still_frames[env] >= rules.search_frames and not tilted[env]
                 stage[env] = CLOSE_FRAME
             elif now == CLOSE_FRAME:  # the frame's reward
                 gone = frame_drained[env]
@@ -178,6 +270,54 @@ def play_frames(
                 break
 
 
+@njit(cache=True)
+def put_ball(ball, x, y, speed):
+    """Put ``ball`` (a row of the balls array) at (x, y) moving straight up at ``speed``."""
+    ball[:] = 0.0
+    ball[BALL_X] = x
+    ball[BALL_Y] = y
+    ball[BALL_VY] = speed
+
+
+@njit(cache=True)
+def cabinet_rules(
+    env, scored, rules, hits, cabinet, tilted, active, on_plunger, warnings, warning_age,
+    skill_left, skill_shot, tilt, still_frames,
+):  # fmt: skip
+    """The cabinet's rules after env ``env``'s frame of physics, which scored ``scored``:
+    returns the frame's points. The skill shot scores its bonus if its rollover is crossed
+    while lit; each touch of the ring by the plumb bob is a warning (forgotten after
+    ``warning_frames`` without another), and one more than ``rules.warnings`` tilts the
+    machine. A tilted machine scores nothing; its ball is lost if it waits on the plunger,
+    or given up where it lies once it has lain still as long as the ball search waits
+    (``tilt``: the machine tilted in this step)."""
+    if skill_left[env] > 0:
+        skill_left[env] -= 1
+        sensor = rules.skill_sensors[env]
+        if sensor >= 0 and hits[env, sensor] > 0:
+            scored += rules.skill_bonus
+            skill_left[env] = 0
+            skill_shot[env] = True
+    touches = int(cabinet[env, BOB_TOUCHES])
+    if touches > 0:
+        warnings[env] += touches
+        warning_age[env] = 0
+        if warnings[env] > rules.warnings and not tilted[env]:
+            tilted[env] = tilt[env] = True
+    elif warnings[env] > 0:
+        warning_age[env] += 1
+        if warning_age[env] >= rules.warning_frames:
+            warnings[env] -= 1
+            warning_age[env] = 0
+    if tilted[env]:
+        skill_shot[env] = False
+        on_plunger[env] = False
+        if still_frames[env] >= rules.search_frames:
+            active[env] = False
+        return 0
+    return scored
+
+
 def new_progress(n_envs: int) -> StepProgress:
     """A zeroed :class:`StepProgress` for ``n_envs`` envs."""
     return StepProgress(
@@ -191,4 +331,6 @@ def new_progress(n_envs: int) -> StepProgress:
         frame_drained=np.zeros(n_envs, dtype=bool),
         launch=np.zeros(n_envs, dtype=bool),
         finite=np.ones(n_envs, dtype=bool),
+        skill_shot=np.zeros(n_envs, dtype=bool),
+        tilt=np.zeros(n_envs, dtype=bool),
     )

@@ -14,6 +14,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from pinball_env.game.actions import (
+    CABINET_BUTTONS,
+    button_names,
+    discrete_buttons,
+)
 from pinball_env.game.play import (
     AFTER_PHYSICS,
     NEW_STEP,
@@ -25,14 +30,15 @@ from pinball_env.game.play import (
 )
 from pinball_env.options import PinballOptions
 from pinball_env.physics import State
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, CABINET_X, CABINET_Y
 from pinball_env.sim.backends import make_world
 from pinball_env.sim.world import compiled_entry
 from pinball_env.table import BUTTONS, TEST_TABLES, Table, check_ball_state
 
-# A discrete action is the buttons held as bits: bit i is button BUTTONS[i] (0 none, 1 left,
-# 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's buttons.
-DISCRETE_BUTTONS = (np.arange(2 ** len(BUTTONS))[:, None] >> np.arange(len(BUTTONS))) & 1 == 1
+# A discrete action of a table without a cabinet is the flipper buttons held as bits: bit i is
+# button BUTTONS[i] (0 none, 1 left, 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's
+# buttons (``game.actions`` has the cabinet's too).
+DISCRETE_BUTTONS = discrete_buttons(cabinet=False)
 RESET_OPTIONS = ("ball_position", "ball_velocity")
 # Ball search: a ball in play that has not moved a ball radius in this long [s] (resting in the
 # shooter lane, say, or held in a flipper's cradle) is served again from the plunger, as a real
@@ -47,11 +53,6 @@ class InvalidActions(ValueError):
     """Actions that are not in the game's action space (raised before anything changes)."""
 
 
-def discrete_action(buttons: Sequence[bool]) -> int:
-    """The discrete action that holds ``buttons`` (one bool per entry of ``BUTTONS``)."""
-    return sum(int(bool(held)) << i for i, held in enumerate(buttons))
-
-
 class GameState(NamedTuple):
     """Everything that changes during play, for every env (the first axis)."""
 
@@ -64,6 +65,13 @@ class GameState(NamedTuple):
     anchor: np.ndarray  # (N, 2) float64: where the ball was when it last moved a radius [m]
     still_frames: np.ndarray  # (N,) int64: frames since then (see BALL_SEARCH_TIME)
     frames: np.ndarray  # (N,) int64: frames played in the current game
+    # The cabinet (tables with one): the tilt itself is the kernel's (world.tilted).
+    plunger_pull: np.ndarray  # (N,) float64: how far the plunger is pulled back [m]
+    on_plunger: np.ndarray  # (N,) bool: the ball in play waits on the plunger
+    nudge_wait: np.ndarray  # (N,) int64: frames until the next nudge can shove the cabinet
+    tilt_warnings: np.ndarray  # (N,) int64: warnings standing
+    warning_age: np.ndarray  # (N,) int64: frames since the last warning
+    skill_left: np.ndarray  # (N,) int64: frames the skill shot stays lit (0: dark)
 
 
 class Game:
@@ -120,7 +128,18 @@ class Game:
             anchor=np.zeros((n_envs, 2)),
             still_frames=np.zeros(n_envs, dtype=np.int64),
             frames=np.zeros(n_envs, dtype=np.int64),
+            plunger_pull=np.zeros(n_envs),
+            on_plunger=np.zeros(n_envs, dtype=bool),
+            nudge_wait=np.zeros(n_envs, dtype=np.int64),
+            tilt_warnings=np.zeros(n_envs, dtype=np.int64),
+            warning_age=np.zeros(n_envs, dtype=np.int64),
+            skill_left=np.zeros(n_envs, dtype=np.int64),
         )
+        # The buttons: the flippers', and the cabinet's on a table that has one.
+        self.cabinet = table.has_cabinet
+        self.button_names = button_names(self.cabinet)
+        self.discrete_buttons = discrete_buttons(self.cabinet)
+        self._no_cabinet_buttons = np.zeros((n_envs, len(CABINET_BUTTONS)), dtype=bool)
         self._everyone = np.ones(n_envs, dtype=bool)
         self._rules: Rules | None = None  # the step loop's numbers (see _rules_now)
         self._play: dict[type, Any] = {}  # play_frames's compiled entries (compiled_entry)
@@ -137,6 +156,15 @@ class Game:
         if ball.radius != self.table.ball.radius or simulation != self.table.simulation:
             raise ValueError(
                 f"table {table.name!r} has another ball size or simulation settings than "
+                f"{self.table.name!r}: every env of a game needs the same"
+            )
+        if (table.cabinet, table.tilt, table.plunger.manual) != (
+            self.table.cabinet,
+            self.table.tilt,
+            self.table.plunger.manual,
+        ):
+            raise ValueError(
+                f"table {table.name!r} has another cabinet, tilt or plunger than "
                 f"{self.table.name!r}: every env of a game needs the same"
             )
         self.world.set_table(env, table)
@@ -205,16 +233,40 @@ class Game:
         state.points[env] = 0
         state.drained[env] = False
         state.frames[env] = 0
-        self.launch(env, rng)
+        if self.cabinet:
+            self.world.state.cabinet[env] = 0.0
+            self.world.state.tilted[env] = False
+            for array in (state.nudge_wait, state.tilt_warnings, state.warning_age,
+                          state.skill_left):  # fmt: skip
+                array[env] = 0
+            self.serve(env)
+        else:
+            self.launch(env, rng)
         if options:
             self.world.place_ball(env, position, velocity)
             self._moved(env)
 
     def launch(self, env: int, rng: np.random.Generator) -> None:
-        """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range."""
+        """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range
+        (with the player's plunger: the ball search's launch of a ball left waiting on it)."""
         low, high = self.world.table_of(env).plunger.speed
         self.world.launch(env, float(rng.uniform(low, high)))
+        self.state.on_plunger[env] = False
+        self.state.plunger_pull[env] = 0.0
         self._moved(env)
+
+    def serve(self, env: int) -> None:
+        """Put env ``env``'s ball on the player's plunger, at rest, to wait for the player."""
+        self.world.launch(env, 0.0)
+        self.world.state.active[env] = False
+        self.state.on_plunger[env] = True
+        self.state.plunger_pull[env] = 0.0
+        self._moved(env)
+
+    @property
+    def in_play(self) -> np.ndarray:
+        """(n_envs,) bool: a ball is in play (moving, or waiting on the player's plunger)."""
+        return self.world.state.active | self.state.on_plunger
 
     def _moved(self, env: int) -> None:
         """Restart env ``env``'s ball-search clock where its ball is now."""
@@ -222,21 +274,23 @@ class Game:
         self.state.still_frames[env] = 0
 
     def buttons(self, actions: Any) -> np.ndarray:
-        """The (n_envs, len(BUTTONS)) bool buttons held by ``actions``: (n_envs,) integers for
-        ``"discrete"``, (n_envs, len(BUTTONS)) zeros and ones for ``"multibinary"``."""
+        """The (n_envs, buttons) bool buttons (:attr:`button_names`) held by ``actions``:
+        (n_envs,) integers for ``"discrete"`` (rows of :attr:`discrete_buttons`), (n_envs,
+        buttons) zeros and ones for ``"multibinary"``."""
         actions = np.asarray(actions)
         if self.action_type == "discrete":
+            n_actions = len(self.discrete_buttons)
             valid = (
                 actions.shape == (self.n_envs,)
                 and actions.dtype.kind in "biu"  # Gymnasium's Discrete takes True as 1
                 and actions.min() >= 0
-                and actions.max() < len(DISCRETE_BUTTONS)
+                and actions.max() < n_actions
             )
             if valid:  # (as integers: a bool array would index as a mask)
-                return DISCRETE_BUTTONS[actions.astype(np.intp)]
-            expected = f"({self.n_envs},) integers in [0, {len(DISCRETE_BUTTONS)})"
+                return self.discrete_buttons[actions.astype(np.intp)]
+            expected = f"({self.n_envs},) integers in [0, {n_actions})"
         else:
-            shape = (self.n_envs, len(BUTTONS))
+            shape = (self.n_envs, len(self.button_names))
             if actions.shape == shape and np.all((actions == 0) | (actions == 1)):
                 return actions.astype(bool)
             expected = f"{shape} zeros and ones"
@@ -267,7 +321,9 @@ class Game:
         Returns ``(reward, game_over)``, (n_envs,) float64 and bool, the reward summed over the
         frames. The step's points and drains (summed) are in :attr:`state`.
         """
-        commands = self.buttons(actions)[:, self.world.flipper_buttons]
+        buttons = self.buttons(actions)
+        commands = buttons[:, self.world.flipper_buttons]
+        cabinet = buttons[:, len(BUTTONS) :] if self.cabinet else self._no_cabinet_buttons
         progress = self._progress
         playing = self._everyone if frozen is None else ~frozen
         progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
@@ -277,7 +333,7 @@ class Game:
         # hook sees the frame.
         swept = self.world.swept_kernel and self.on_frame is None
         args = (geometries, settings, self.state, self.world.scratch, progress, rules, commands,
-                swept)  # fmt: skip
+                np.ascontiguousarray(cabinet), swept)  # fmt: skip
         play = self._play.get(type(geometries))  # one table (tuples) or one per env (lists)
         if play is None:
             play = self._play[type(geometries)] = compiled_entry(play_frames, (*args, 0, 0))
@@ -328,6 +384,38 @@ class Game:
             search_frames=self.ball_search_frames,
             radius=self.table.ball.radius,
             scores=self.world.tables.scores,
+            **self._cabinet_rules(),
+        )
+
+    def _cabinet_rules(self) -> dict[str, Any]:
+        """The cabinet's numbers of the step loop (all zero for a table without a cabinet)."""
+        table, rate = self.table, self.table.simulation.frame_rate
+        plunger, cabinet, tilt = table.plunger, table.cabinet, table.tilt
+        skill_sensors = np.full(self.n_envs, -1, dtype=np.int64)
+        if not self.cabinet:
+            return dict(cabinet=False, plunger_x=0.0, plunger_y=0.0, stroke=0.0, pull_step=0.0,
+                        pull_speeds=(0.0, 0.0), nudge_impulse=0.0, nudge_frames=0, warnings=0,
+                        warning_frames=0, skill_sensors=skill_sensors, skill_bonus=0,
+                        skill_frames=0)  # fmt: skip
+        skill = plunger.skill_shot
+        for env in range(self.n_envs):
+            names = self.world.table_of(env).element_names
+            if skill is not None and skill.sensor in names:
+                skill_sensors[env] = names.index(skill.sensor)
+        return dict(
+            cabinet=True,
+            plunger_x=float(plunger.position[0]),
+            plunger_y=float(plunger.position[1]),
+            stroke=plunger.stroke,
+            pull_step=plunger.stroke / (plunger.pull_time * rate),
+            pull_speeds=tuple(map(float, plunger.pull_speed)),
+            nudge_impulse=cabinet.nudge_impulse,
+            nudge_frames=max(1, round(cabinet.nudge_interval * rate)),
+            warnings=tilt.warnings,
+            warning_frames=max(1, round(tilt.warning_time * rate)),
+            skill_sensors=skill_sensors,
+            skill_bonus=0 if skill is None else skill.bonus,
+            skill_frames=0 if skill is None else max(1, round(skill.time * rate)),
         )
 
     # --- what the envs report -----------------------------------------------------------------
@@ -351,6 +439,21 @@ class Game:
             "points": state.points.copy(),
             "drained": state.drained.copy(),
             "frames": state.frames.copy(),
+            **self._cabinet_infos(slice(None)),
+        }
+
+    def _cabinet_infos(self, envs: int | slice) -> dict[str, Any]:
+        """The cabinet's entries of the infos (none for a table without a cabinet)."""
+        if not self.cabinet:
+            return {}
+        state, world = self.state, self.world.state
+        return {
+            "tilt_warnings": state.tilt_warnings[envs].copy(),
+            "tilted": world.tilted[envs] | self._progress.tilt[envs],
+            "ball_on_plunger": state.on_plunger[envs].copy(),
+            "plunger_pull": state.plunger_pull[envs].copy(),
+            "cabinet_offset": world.cabinet[envs, CABINET_X : CABINET_Y + 1].copy(),
+            "skill_shot": self._progress.skill_shot[envs].copy(),
         }
 
     def info(self, env: int) -> dict[str, Any]:
@@ -366,6 +469,10 @@ class Game:
             "points": int(state.points[env]),
             "drained": bool(state.drained[env]),
             "frames": int(state.frames[env]),
+            **{
+                key: value if isinstance(value, np.ndarray) else value.item()
+                for key, value in self._cabinet_infos(env).items()
+            },
         }
 
 

@@ -43,3 +43,34 @@ CONTACT_ELEMENT = 0  # global element id (stored as float, exact for any realist
 CONTACT_TIME = 1  # time of the contact since the start of the step [s]
 CONTACT_SPEED = 2  # normal approach speed relative to the surface before the response [m/s]
 CONTACT_SIZE = 3
+
+# The cabinet's constants (tables with a cabinet), array of shape (1, CABINET_SIZE), float64; a
+# table without one has (0, CABINET_SIZE). The cabinet is a mass-spring-damper on its legs, the
+# plumb bob a pendulum hanging in it; see ``physics.cabinet``.
+CABINET_MASS = 0  # [kg]
+CABINET_STIFFNESS = 1  # [N/m]
+CABINET_DAMPING = 2  # [N s/m]
+BOB_LENGTH = 3  # pendulum length [m]
+BOB_DAMPING = 4  # angular damping rate [1/s]
+BOB_RING = 5  # the bob's angle from vertical where it touches the tilt ring [rad]
+BOB_RESTITUTION = 6  # of the bob's bounce off the ring [-]
+BOB_GRAVITY = 7  # g [m/s^2], which swings the bob back
+CABINET_SIZE = 8
+
+# The cabinet's state, array of shape (n_envs, CABINET_STATE_SIZE), float64: offset and velocity
+# of the cabinet from where it stands (x to the right, y up the table), the shove a nudge gives it
+# in the next substep, the plumb bob's angle from vertical (towards +x and +y) and angular
+# velocity, and its touches of the ring.
+CABINET_X = 0  # [m]
+CABINET_Y = 1  # [m]
+CABINET_VX = 2  # [m/s]
+CABINET_VY = 3  # [m/s]
+CABINET_SHOVE_X = 4  # impulse of the next substep [N s], cleared once applied
+CABINET_SHOVE_Y = 5  # [N s]
+BOB_X = 6  # [rad]
+BOB_Y = 7  # [rad]
+BOB_VX = 8  # [rad/s]
+BOB_VY = 9  # [rad/s]
+BOB_TOUCHES = 10  # touches of the ring in the last frame (a count, as a float)
+BOB_ON_RING = 11  # 1 while the bob lies against the ring, 0 once it has swung clear
+CABINET_STATE_SIZE = 12

@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pinball_env.physics.columns import BALL_STATE_SIZE, CONTACT_SIZE
+from pinball_env.physics.columns import BALL_STATE_SIZE, CABINET_STATE_SIZE, CONTACT_SIZE
 
 # Contacts logged per env and frame; more are counted but not logged. A frame of a ball rattling
 # in a corner makes a few dozen; the cap bounds memory, not physics.
@@ -46,6 +46,10 @@ class Geometry(NamedTuple):
     # bounding box overlaps it, packed as [cell starts (cells + 1) | ids | first and last column
     # and row of each element (S + C, 4)], int64. The cell size and count are in Settings.
     grid: np.ndarray
+    # The cabinet's constants, (1, CABINET_SIZE) float64 (see ``physics.cabinet``), or
+    # (0, CABINET_SIZE) for a table without a cabinet: then nothing moves it, and the ball feels
+    # gravity alone.
+    cabinet: np.ndarray
 
 
 class Settings(NamedTuple):
@@ -75,6 +79,8 @@ class State(NamedTuple):
     contacts: np.ndarray  # (N, capacity, CONTACT_SIZE) float64: log of the frame's contacts
     contact_count: np.ndarray  # (N,) int64: contacts of the frame (may exceed the capacity)
     hits: np.ndarray  # (N, E) int64: hits of the frame per element id (scoring events)
+    cabinet: np.ndarray  # (N, CABINET_STATE_SIZE) float64: the cabinet and its plumb bob
+    tilted: np.ndarray  # (N,) bool, input: the machine is tilted (kickers dead)
 
 
 class Scratch(NamedTuple):
@@ -178,6 +184,8 @@ def make_state(geometry: Geometry, n_envs: int, contact_capacity: int = CONTACT_
         contacts=np.zeros((n_envs, contact_capacity, CONTACT_SIZE)),
         contact_count=np.zeros(n_envs, dtype=np.int64),
         hits=np.zeros((n_envs, element_count(geometry)), dtype=np.int64),
+        cabinet=np.zeros((n_envs, CABINET_STATE_SIZE)),
+        tilted=np.zeros(n_envs, dtype=np.bool_),
     )
 
 

@@ -36,12 +36,14 @@ import math
 
 from numba import njit
 
+from pinball_env.physics.cabinet import cabinet_substep
 from pinball_env.physics.columns import (
     BALL_SPIN,
     BALL_VX,
     BALL_VY,
     BALL_X,
     BALL_Y,
+    BOB_TOUCHES,
     CONTACT_ELEMENT,
     CONTACT_SPEED,
     CONTACT_TIME,
@@ -516,6 +518,11 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     held, hit_elements = scratch.held[env], scratch.hit_elements[env]
     state.contact_count[env] = 0
     state.hits[env, :] = 0
+    has_cabinet = geometry.cabinet.shape[0] > 0
+    if has_cabinet:
+        state.cabinet[env, BOB_TOUCHES] = 0.0
+    dvx = dvy = 0.0  # the cabinet's velocity change in a substep (none without a cabinet)
+    kick_scale = 0.0 if state.tilted[env] else 1.0  # a tilted machine's kickers are dead
     ball = state.balls[env]
     x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
     for k in range(settings.substeps):
@@ -527,9 +534,12 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             held[j] = False
         held_time = h
         x0, y0 = x, y
+        if has_cabinet:
+            dvx, dvy = cabinet_substep(state.cabinet[env], geometry.cabinet[0], h)
         if state.active[env]:
-            vx += settings.gravity_x * h
-            vy += settings.gravity_y * h
+            # Relative to the cabinet, the ball feels its acceleration opposite (a frame force).
+            vx += settings.gravity_x * h - dvx
+            vy += settings.gravity_y * h - dvy
             remaining = h
             stalled = n_hits = 0
             pushers = 0  # bit j: flipper j pushed into the ball in this substep
@@ -590,7 +600,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 props = element_props(element, geometry)
                 vx, vy, spin, speed = respond(
                     vx, vy, spin, nx, ny, svx, svy, r,
-                    props[PROP_RESTITUTION], props[PROP_FRICTION], props[PROP_KICK],
+                    props[PROP_RESTITUTION], props[PROP_FRICTION], kick_scale * props[PROP_KICK],
                     settings.resting_speed,
                 )  # fmt: skip
                 # Separation: leave the ball exactly skin off the surface it touched.
@@ -612,7 +622,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     before, before_nx, before_ny = last, last_nx, last_ny
                 last, last_nx, last_ny = element, nx, ny
                 log_contact(state, env, element, k * h + h - remaining, speed)
-                if is_hit(speed, props[PROP_KICK], settings.resting_speed):
+                if is_hit(speed, kick_scale * props[PROP_KICK], settings.resting_speed):
                     hit_elements[n_hits] = element
                     n_hits += 1
                 if element >= flipper_id and svx * nx + svy * ny > 0.0:

@@ -144,11 +144,76 @@ class Sensor:
 
 
 @dataclass(frozen=True)
+class SkillShot:
+    """A rollover lit when the player's plunger fires the ball: crossed while lit, it scores a
+    bonus (a well-judged pull reaches it, a harder or softer one does not)."""
+
+    sensor: str  # name of the rollover sensor [-]
+    bonus: int  # points for crossing it while lit [-]
+    time: float  # how long it stays lit after the plunger fires [s]
+
+
+@dataclass(frozen=True)
 class Plunger:
-    """How a ball is put into play from the shooter lane."""
+    """How a ball is put into play from the shooter lane.
+
+    Without ``stroke`` (an automatic plunger) the machine fires every ball at a speed drawn from
+    ``speed``. With ``stroke``, ``pull_time`` and ``pull_speed`` (the player's plunger, which
+    comes with a :class:`Cabinet`) each ball waits on the plunger until the player pulls it back
+    and lets go; ``speed`` is then the range of the ball search's launch of a ball left waiting.
+    """
 
     position: tuple[float, float]  # ball centre at rest on the plunger [m]
     speed: tuple[float, float]  # launch speed range (min, max), straight up the table [m/s]
+    stroke: float | None = None  # how far the plunger pulls back [m]
+    pull_time: float | None = None  # time a steady pull takes over the whole stroke [s]
+    # Launch speed at the shortest pull and at the whole stroke (linear between) [m/s].
+    pull_speed: tuple[float, float] | None = None
+    skill_shot: SkillShot | None = None
+
+    @property
+    def manual(self) -> bool:
+        """Whether the player launches the balls (else the machine does)."""
+        return self.stroke is not None
+
+    def launch_speed(self, pull: float) -> float:
+        """Launch speed [m/s] of the player's plunger let go at ``pull`` (0 < pull <= stroke)."""
+        low, high = self.pull_speed
+        return low + (high - low) * pull / self.stroke
+
+
+@dataclass(frozen=True)
+class Cabinet:
+    """The cabinet on its legs, a mass-spring-damper that a nudge shoves (see
+    ``physics.cabinet``), and the shove a nudge gives it."""
+
+    mass: float  # [kg]
+    stiffness: float  # of the legs and floor [N/m]
+    damping: float  # [N s/m]
+    nudge_impulse: float  # impulse of one shove [N s]
+    nudge_interval: float  # shortest time between two shoves [s]
+
+    @property
+    def natural_frequency(self) -> float:
+        """Undamped natural frequency sqrt(k / M) [rad/s]."""
+        return math.sqrt(self.stiffness / self.mass)
+
+    @property
+    def damping_ratio(self) -> float:
+        """c / (2 sqrt(k M)) [-]."""
+        return self.damping / (2.0 * math.sqrt(self.stiffness * self.mass))
+
+
+@dataclass(frozen=True)
+class Tilt:
+    """The plumb bob, the ring around it and the tilt rules (see ``physics.cabinet``)."""
+
+    bob_length: float  # pendulum length [m]
+    bob_damping: float  # angular damping rate [1/s]
+    ring_angle: float  # the bob's angle from vertical where it touches the ring [deg]
+    ring_restitution: float  # of the bob's bounce off the ring [-]
+    warnings: int  # touches of the ring that warn; the next one tilts [-]
+    warning_time: float  # a warning is forgotten after this long without another touch [s]
 
 
 @dataclass(frozen=True)
@@ -186,6 +251,8 @@ class Table:
     flippers: tuple[Flipper, ...] = ()
     sensors: tuple[Sensor, ...] = ()
     plunger: Plunger | None = None  # None: the ball is only ever placed at ball.start
+    cabinet: Cabinet | None = None  # with tilt and a manual plunger: the whole cabinet
+    tilt: Tilt | None = None
     slope_deg: float = 6.5  # inclination of the playfield [deg]
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
@@ -276,7 +343,29 @@ class Table:
             grid=_frozen_array(
                 build_grid(segments, circles, *self._grid_layout()), np.int64, (-1,)
             ),
+            cabinet=_frozen_array(self._cabinet_row(), np.float64, (-1, columns.CABINET_SIZE)),
         )
+
+    @property
+    def has_cabinet(self) -> bool:
+        """Whether the table has the whole cabinet: the player's plunger, the nudge, the tilt."""
+        return self.cabinet is not None
+
+    def _cabinet_row(self) -> list[list[float]]:
+        """The cabinet's constants as the kernel's rows (columns ``CABINET_*``, ``BOB_*``)."""
+        if self.cabinet is None:
+            return []
+        cabinet, tilt = self.cabinet, self.tilt
+        row = [0.0] * columns.CABINET_SIZE
+        row[columns.CABINET_MASS] = cabinet.mass
+        row[columns.CABINET_STIFFNESS] = cabinet.stiffness
+        row[columns.CABINET_DAMPING] = cabinet.damping
+        row[columns.BOB_LENGTH] = tilt.bob_length
+        row[columns.BOB_DAMPING] = tilt.bob_damping
+        row[columns.BOB_RING] = math.radians(tilt.ring_angle)
+        row[columns.BOB_RESTITUTION] = tilt.ring_restitution
+        row[columns.BOB_GRAVITY] = self.gravity
+        return [row]
 
     def _grid_layout(self) -> tuple[float, int, int]:
         n_elements = sum(len(wall.segments()) for wall in self.walls) + len(self.posts)

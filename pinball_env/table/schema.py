@@ -28,13 +28,16 @@ from pinball_env.physics import flipper_distance, flipper_reach, point_segment_d
 from pinball_env.table.model import (
     BUTTONS,
     Ball,
+    Cabinet,
     Flipper,
     Material,
     Plunger,
     Post,
     Sensor,
     Simulation,
+    SkillShot,
     Table,
+    Tilt,
     Wall,
     enclosure,
     inside,
@@ -362,6 +365,16 @@ def _options(
         options["simulation"] = _record(
             Simulation, raw["simulation"], top.key("simulation"), simulation_parsers
         )
+    substep = 1.0 / (
+        options.get("simulation", Simulation()).frame_rate
+        * options.get("simulation", Simulation()).substeps
+    )
+    if "cabinet" in raw:
+        options["cabinet"] = _cabinet(raw["cabinet"], top.key("cabinet"), substep)
+    if "tilt" in raw:
+        gravity = options.get("gravity", Table.gravity)
+        options["tilt"] = _tilt(raw["tilt"], top.key("tilt"), substep, gravity)
+    _check_whole_cabinet(options, elements["sensors"], top)
     return options
 
 
@@ -383,7 +396,10 @@ def table_to_dict(table: Table) -> dict[str, Any]:
     for group in ("walls", "posts", "flippers", "sensors"):
         data[group] = [plain(element) for element in getattr(table, group)]
     if table.plunger is not None:
-        data["plunger"] = plain(table.plunger)
+        data["plunger"] = {k: v for k, v in plain(table.plunger).items() if v is not None}
+    for section in ("cabinet", "tilt"):
+        if getattr(table, section) is not None:
+            data[section] = plain(getattr(table, section))
     data["simulation"] = plain(table.simulation)
     return data
 
@@ -422,6 +438,8 @@ _TOP_KEYS = (
     "flippers",
     "sensors",
     "plunger",
+    "cabinet",
+    "tilt",
     "simulation",
 )
 
@@ -521,11 +539,120 @@ def _sensor(value: object, loc: _Loc, point: Parser) -> Sensor:
 
 def _plunger(value: object, loc: _Loc, point: Parser) -> Plunger:
     speed = partial(_pair, item=partial(_number, low=0.0, high=20.0, open_low=True))
-    plunger = _record(Plunger, value, loc, {"position": point, "speed": speed})
-    low, high = plunger.speed
-    if low > high:
-        loc.key("speed").fail(f"expected [min, max] with min <= max, got [{low:g}, {high:g}]")
+    parsers = {
+        "position": point,
+        "speed": speed,
+        "stroke": partial(_number, low=0.005, high=0.2),  # [m]: a real one pulls ~5 cm
+        "pull_time": partial(_number, low=0.05, high=5.0),  # [s]
+        "pull_speed": speed,
+        "skill_shot": _skill_shot,
+    }
+    plunger = _record(Plunger, value, loc, parsers)
+    for key in ("speed", "pull_speed"):
+        if getattr(plunger, key) is not None:
+            low, high = getattr(plunger, key)
+            if low > high:
+                loc.key(key).fail(f"expected [min, max] with min <= max, got [{low:g}, {high:g}]")
+    manual = [key for key in ("stroke", "pull_time", "pull_speed") if getattr(plunger, key) is None]
+    if len(manual) not in (0, 3):
+        loc.fail(
+            "a player's plunger needs stroke, pull_time and pull_speed together; missing "
+            + ", ".join(manual)
+        )
+    if plunger.skill_shot is not None and not plunger.manual:
+        loc.key("skill_shot").fail("a skill shot needs the player's plunger (stroke, ...)")
     return plunger
+
+
+def _skill_shot(value: object, loc: _Loc) -> SkillShot:
+    parsers = {
+        "sensor": _string,
+        "bonus": _score,
+        "time": partial(_number, low=0.1, high=60.0),  # [s]
+    }
+    return _record(SkillShot, value, loc, parsers)
+
+
+# The cabinet's ranges. A real machine weighs 100-140 kg, a shove moves it a few millimetres; the
+# semi-implicit Euler of the substeps needs the spring and damper slow against a substep.
+MAX_CABINET_SPEED = 1.0  # fastest a shove may set the cabinet moving [m/s]
+MAX_RATE_PER_SUBSTEP = 0.5  # most of sqrt(k/M), c/M, sqrt(g/L), bob damping times a substep
+
+
+def _cabinet(value: object, loc: _Loc, substep: float) -> Cabinet:
+    parsers = {
+        "mass": partial(_number, low=10.0, high=1000.0),  # [kg]
+        "stiffness": partial(_number, low=1.0, high=1e7),  # [N/m]
+        "damping": partial(_number, low=0.0, high=1e6),  # [N s/m]
+        "nudge_impulse": partial(_number, low=0.0, high=500.0, open_low=True),  # [N s]
+        "nudge_interval": partial(_number, low=0.05, high=10.0),  # [s]
+    }
+    cabinet = _record(Cabinet, value, loc, parsers)
+    if cabinet.nudge_impulse / cabinet.mass > MAX_CABINET_SPEED:
+        loc.key("nudge_impulse").fail(
+            f"a shove of {cabinet.nudge_impulse:g} N s sets the {cabinet.mass:g} kg cabinet "
+            f"moving at {cabinet.nudge_impulse / cabinet.mass:g} m/s, above "
+            f"{MAX_CABINET_SPEED:g} m/s (a shove moves a real cabinet a few millimetres)"
+        )
+    _check_rates(
+        loc, substep, stiffness=cabinet.natural_frequency, damping=cabinet.damping / cabinet.mass
+    )
+    return cabinet
+
+
+def _tilt(value: object, loc: _Loc, substep: float, gravity: float) -> Tilt:
+    parsers = {
+        "bob_length": partial(_number, low=0.02, high=1.0),  # [m]: VPX's bob is 0.1 m
+        "bob_damping": partial(_number, low=0.0, high=100.0),  # [1/s]
+        "ring_angle": partial(_number, low=0.0, high=30.0, open_low=True),  # [deg], small angles
+        "ring_restitution": partial(_number, low=0.0, high=1.0),
+        "warnings": partial(_number, low=0, high=10, integer=True),
+        "warning_time": partial(_number, low=0.5, high=600.0),  # [s]
+    }
+    tilt = _record(Tilt, value, loc, parsers)
+    _check_rates(
+        loc, substep, bob_length=math.sqrt(gravity / tilt.bob_length), bob_damping=tilt.bob_damping
+    )
+    return tilt
+
+
+def _check_rates(loc: _Loc, substep: float, **rates: float) -> None:
+    """Each rate [1/s] times a substep is at most MAX_RATE_PER_SUBSTEP, for a stable integration."""
+    for key, rate in rates.items():
+        if rate * substep > MAX_RATE_PER_SUBSTEP:
+            loc.key(key).fail(
+                f"too fast for the substeps: a rate of {rate:g}/s over a substep of "
+                f"{substep:g} s is {rate * substep:g}, at most {MAX_RATE_PER_SUBSTEP:g} "
+                "(raise simulation.substeps, or soften it)"
+            )
+
+
+def _check_whole_cabinet(
+    options: Mapping[str, Any], sensors: tuple[Sensor, ...], top: _Loc
+) -> None:
+    """The player's plunger, the cabinet and the tilt come together; a skill shot names a
+    rollover of the table."""
+    plunger = options.get("plunger")
+    parts = {
+        "a player's plunger (plunger: stroke, pull_time, pull_speed)": plunger is not None
+        and plunger.manual,
+        "cabinet": "cabinet" in options,
+        "tilt": "tilt" in options,
+    }
+    if any(parts.values()) and not all(parts.values()):
+        have = [name for name, present in parts.items() if present]
+        lack = [name for name, present in parts.items() if not present]
+        top.fail(
+            f"the cabinet is a whole: {', '.join(have)} without {', '.join(lack)} (a table has "
+            "the player's plunger, the cabinet and the tilt, or none of them)"
+        )
+    skill = plunger.skill_shot if plunger is not None else None
+    if skill is not None:
+        rollovers = [sensor.name for sensor in sensors if not sensor.drain]
+        if skill.sensor not in rollovers:
+            top.key("plunger").key("skill_shot").key("sensor").fail(
+                f"no rollover sensor {skill.sensor!r} (rollovers: {_listing(rollovers)})"
+            )
 
 
 def _check_elements(
