@@ -14,7 +14,13 @@ from pinball_env.envs.layouts import Layouts, frame_size
 from pinball_env.game import Game
 from pinball_env.observation import TableRenderers, make_observer
 from pinball_env.options import PinballOptions
-from pinball_env.render import FrameRenderer, Renderer, render_size, scoreboard
+from pinball_env.render import (
+    SHAKE_EXAGGERATION,
+    FrameRenderer,
+    Renderer,
+    render_size,
+    scoreboard,
+)
 from pinball_env.table import Table, load_any_table
 
 
@@ -138,11 +144,34 @@ class PinballCore:
 
     def frame(self, env: int) -> np.ndarray:
         """The frame ``render()`` shows of env ``env``: its playfield (the ball where it
-        drained once the game is over) and a scoreboard beside it."""
-        world = self.game.world
-        renderer = self.frame_renderers(world.table_of(env))
-        playfield = renderer.frame(tuple(world.balls[env, :2]), world.state.flipper_angle[env])
-        board = scoreboard(playfield.shape[0], self.game.score[env], self.game.balls_left[env])
+        drained once the game is over) and a scoreboard beside it. With the cabinet: the
+        plunger pulled back (the ball waiting on it with it), the playfield moved by the
+        cabinet's shake (SHAKE_EXAGGERATION times), and the tilt warnings or TILT on the
+        scoreboard."""
+        game, world = self.game, self.game.world
+        table = world.table_of(env)
+        renderer = self.frame_renderers(table)
+        ball, angles = tuple(world.balls[env, :2]), world.state.flipper_angle[env]
+        if not game.cabinet:
+            playfield = renderer.frame(ball, angles)
+            board = scoreboard(playfield.shape[0], game.score[env], game.balls_left[env])
+            return np.concatenate([playfield, board], axis=1)
+        info = game.info(env)  # "tilted" holds a tilt of the last step that ended at once
+        playfield = renderer.frame(
+            ball,
+            angles,
+            plunger_pull=info["plunger_pull"],
+            on_plunger=info["ball_on_plunger"],
+            cabinet_offset=tuple(SHAKE_EXAGGERATION * info["cabinet_offset"]),
+        )
+        board = scoreboard(
+            playfield.shape[0],
+            info["score"],
+            info["balls_left"],
+            tilt_warnings=info["tilt_warnings"],
+            allowed_warnings=table.tilt.warnings,
+            tilted=info["tilted"],
+        )
         return np.concatenate([playfield, board], axis=1)
 
     def close(self) -> None:

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 
 from pinball_env.envs.core import CoreAttributes, PinballCore
-from pinball_env.game import DISCRETE_BUTTONS, InvalidActions, action_meanings
+from pinball_env.game import InvalidActions, action_meanings, discrete_action
 from pinball_env.options import PinballOptions
 from pinball_env.render import Window
 from pinball_env.table import BUTTONS, Table
@@ -42,6 +42,31 @@ class PinballEnv(CoreAttributes, gym.Env):
     A button acts for the whole step (one frame, 1/60 s, or ``frame_skip`` frames): held, the
     flipper swings up to its stop and stays there; released, it falls back to rest.
 
+    **The whole cabinet** (``Pinball-v1``, a table with ``cabinet`` and ``tilt`` sections and
+    the player's plunger): ``Discrete(32)``, as ALE names its actions
+    (:meth:`get_action_meanings`). Action ``a`` holds the flippers ``a & 3`` as above, the
+    plunger if ``a & 4``, and the nudge ``a >> 3``:
+
+    | Num   | Action                                                            |
+    |-------|-------------------------------------------------------------------|
+    | 0-3   | NOOP, LEFT_FLIPPER, RIGHT_FLIPPER, BOTH_FLIPPERS                  |
+    | 4-7   | PLUNGER, LEFT_FLIPPER_PLUNGER, RIGHT_..., BOTH_FLIPPERS_PLUNGER    |
+    | 8-15  | NUDGE_LEFT, LEFT_FLIPPER_NUDGE_LEFT, ..., BOTH_FLIPPERS_PLUNGER_NUDGE_LEFT |
+    | 16-23 | NUDGE_RIGHT and the same combinations                             |
+    | 24-31 | NUDGE_UP and the same combinations                                |
+
+    ``action_type="multibinary"``: ``MultiBinary(6)``, (left, right, plunger, nudge left,
+    nudge right, nudge up); nudges pressed together shove along the sum of their directions
+    (left and right cancel). The plunger: while its button is held it pulls back (the
+    table's ``stroke`` in ``pull_time``: 5 cm in 1 s on ``classic_v1``); let go, it fires a
+    ball waiting on it at a speed linear in the pull (``pull_speed``: 0.5 m/s at the shortest
+    pull to 3.6 m/s at the whole stroke). A nudge shoves the cabinet (``nudge_impulse``, 36 N s
+    on the 120 kg cabinet: 0.3 m/s); a nudge held or pressed again within ``nudge_interval``
+    (0.25 s) of the last shove does nothing, the fastest the cabinet can be shoved. The cabinet
+    swings back on its legs (a mass-spring-damper); the ball, simulated relative to the
+    table, feels the cabinet's acceleration opposite, so a nudge moves the table under it by a
+    few millimetres and back.
+
     On the keyboard (``get_keys_to_action``, for ``gymnasium.utils.play.play`` and
     ``python -m pinball_env.tools.play``): left flipper Left Shift, Z or the left arrow; right
     flipper Right Shift, M or the right arrow.
@@ -65,9 +90,25 @@ class PinballEnv(CoreAttributes, gym.Env):
     | 9     | balls left, the one in play included          | 0     | balls | -     |
 
     The bounds come from the table (playfield size, flipper swing and speeds): for another table
-    the flipper rows repeat once per flipper in the table's order. A drained ball is replaced at
-    once by the next one on the plunger; after the last one the ball stays where it crossed the
-    drain.
+    the flipper rows repeat once per flipper in the table's order. A drained ball is replaced
+    at once by the next one on the plunger; after the last one the ball stays where it crossed
+    the drain. A ball waiting on the player's plunger is in play (1).
+
+    With the cabinet (``Pinball-v1``), 8 more rows (18 in all on ``classic_v1``):
+
+    | Index | Observation                                   | Min   | Max   | Unit  |
+    |-------|-----------------------------------------------|-------|-------|-------|
+    | 10    | plunger pull                                  | 0     | 0.05  | m     |
+    | 11    | ball waiting on the plunger (1) or not (0)    | 0     | 1     | -     |
+    | 12    | cabinet offset x (clipped to +-0.02)          | -0.02 | 0.02  | m     |
+    | 13    | cabinet offset y, up the table (clipped)      | -0.02 | 0.02  | m     |
+    | 14    | cabinet velocity x (clipped to +-1)           | -1    | 1     | m/s   |
+    | 15    | cabinet velocity y (clipped to +-1)           | -1    | 1     | m/s   |
+    | 16    | tilt warnings standing                        | 0     | 3     | -     |
+    | 17    | tilted (1) or not (0)                         | 0     | 1     | -     |
+
+    (the pull's maximum is the table's stroke, in strokes (0-1) for generated tables; the
+    warnings' is the table's allowed warnings + 1). ``rays`` come after these rows.
 
     ``obs_type="rgb"``: a ``Box(0, 255, (84, 84, 3), uint8)`` picture of the whole table (stretched
     to the image), drawn without a display; ``obs_type="grayscale"``: the same as
@@ -76,7 +117,8 @@ class PinballEnv(CoreAttributes, gym.Env):
     ## Rewards
 
     The points of the step's scoring events times ``reward_scale`` (default 0.01): a pop bumper
-    is 100 points (reward 1), a slingshot or a rollover 10 (0.1). Optional shaping, off by
+    is 100 points (reward 1), a slingshot or a rollover 10 (0.1); on ``classic_v1`` the skill
+    shot 1000 (10). A tilted machine scores nothing. Optional shaping, off by
     default: ``height_shaping`` times the rise of the ball during the step in table heights (a
     potential, so it sums to ``height_shaping`` times the net rise of each ball, from its launch
     to where it drains); ``drain_penalty`` taken off for each ball that drains.
@@ -85,6 +127,8 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     Flippers at rest, score 0, ``balls`` balls to play; the first ball is fired up the shooter
     lane at a speed drawn uniformly from the table's plunger range (2.2-3.2 m/s on ``classic``).
+    With the cabinet, the cabinet and its plumb bob at rest, no warnings, and each ball waits
+    at rest on the plunger for the player (``info["ball_on_plunger"]``).
     ``reset(options={"ball_position": [x, y], "ball_velocity": [vx, vy]})`` (metres, metres per
     second; either key alone is allowed) puts the ball in play at that state instead, for tests
     and curricula. The state is checked as a table file is: inside the outline, clear of every
@@ -106,6 +150,22 @@ class PinballEnv(CoreAttributes, gym.Env):
     ``score`` (points this game), ``balls_left``, ``events`` (scoring element name -> hits this
     step), ``points`` (this step), ``drained`` (a ball drained this step) and ``frames``
     (frames played in this game).
+
+    **The cabinet's rules** (``Pinball-v1``). A ball left waiting on the plunger for 10 s
+    (BALL_SEARCH_TIME) is fired by the machine at a speed drawn from the plunger's range, so
+    every game still ends; a ball that falls back down the shooter lane waits on the plunger
+    again. The skill shot: the rollover ``skill_lane`` (under the top arch, on the right) is
+    lit for 1.25 s after the player's plunge and scores 1000 points if crossed while lit: a
+    pull of 56-58 frames (of the 60 of the whole stroke) makes it. The tilt: a plumb bob (a
+    0.1 m pendulum) swings with the cabinet; each time it touches its ring (5 degrees from
+    vertical) is a warning, forgotten after 10 s without another; the touch after 2 warnings
+    tilts the machine: the flippers and kickers go dead, nothing scores, the ball is lost
+    (at once if it waits on the plunger; else where it drains, or where it lies still for 10
+    s) and play goes on with the next ball, the tilt and the warnings cleared. One nudge swings
+    the bob about 2.5 degrees; nudges left and right in a rhythm build its swing up.
+    ``info`` adds ``tilt_warnings``, ``tilted`` (the machine is tilted, or tilted in this
+    step), ``ball_on_plunger``, ``plunger_pull`` [m], ``cabinet_offset`` [m] and ``skill_shot``
+    (made in this step).
 
     ## Generated tables (``PinballProcgen-v0``)
 
@@ -182,6 +242,10 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     ## Version History
 
+    - v1: the whole cabinet on ``classic_v1`` (the classic layout): the player's plunger and a
+      skill shot, the nudge, the plumb-bob tilt; 32 actions. (``gym.make("Pinball-v0")`` now
+      says that v1 exists, as Gymnasium does for every older version; v0's games are bitwise
+      unchanged.)
     - v0: first release: swept collision against walls, posts and rotating flippers.
     """
 
@@ -192,6 +256,17 @@ class PinballEnv(CoreAttributes, gym.Env):
         "left": ("K_LSHIFT", "K_z", "K_LEFT"),
         "right": ("K_RSHIFT", "K_m", "K_RIGHT"),
     }
+    # The cabinet's buttons (a table with one, Pinball-v1), the same way.
+    CABINET_KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "plunger": ("K_DOWN", "K_RETURN"),
+        "nudge_left": ("K_x",),
+        "nudge_right": ("K_n",),
+        "nudge_up": ("K_UP", "K_b"),
+    }
+    # A cabinet table's 12 keys have 4095 sets: its map holds every set of flipper keys (as a
+    # table without a cabinet) and every set of at most this many keys with a cabinet key
+    # (both flippers, the plunger and a nudge at once), 800 in all.
+    MAX_CABINET_KEYS: ClassVar[int] = 4
 
     def __init__(self, options: PinballOptions | None = None, **kwargs: Any) -> None:
         if options is None or kwargs:
@@ -264,27 +339,41 @@ class PinballEnv(CoreAttributes, gym.Env):
         return state
 
     def get_keys_to_action(self) -> dict[tuple[int, ...], int | np.ndarray]:
-        """The keyboard map of ``gymnasium.utils.play.play``: every non-empty set of the
-        :attr:`FLIPPER_KEYS` (a sorted tuple of pygame key codes) -> the action pressing the
-        buttons of its keys. Actions are ints for ``action_type="discrete"`` and int8 (left,
-        right) arrays for ``"multibinary"`` (then pass ``noop=np.array([0, 0])`` to ``play``,
-        whose default noop, 0, is not a MultiBinary action). Needs pygame for the key codes."""
+        """The keyboard map of ``gymnasium.utils.play.play``: a set of keys (a sorted tuple of
+        pygame key codes) -> the action pressing the buttons of its keys. Keys are the
+        :attr:`FLIPPER_KEYS` and, on a table with the cabinet, the :attr:`CABINET_KEYS`; the map
+        has every non-empty set of flipper keys and, with the cabinet, every set of at most
+        :attr:`MAX_CABINET_KEYS` keys that holds a cabinet key (``play`` looks up the exact set
+        held: a larger one is no action). Actions are ints for ``action_type="discrete"`` and
+        int8 arrays of the buttons (``game.button_names``) for ``"multibinary"`` (then pass
+        ``noop=np.zeros(env.action_space.n, np.int8)`` to ``play``, whose default noop, 0, is
+        not a MultiBinary action). A discrete action holds one nudge: with
+        several nudge keys held, the first of nudge left, right, up wins (a button array presses
+        them all; left and right cancel). Needs pygame for the key codes."""
         pygame = Window.import_pygame()
+        names = self.game.button_names
+        declared = {**self.FLIPPER_KEYS, **self.CABINET_KEYS}
         keys = [
             (getattr(pygame, name), button)
-            for button, names in enumerate(self.FLIPPER_KEYS[b] for b in BUTTONS)
-            for name in names
+            for button, names_of_button in enumerate(declared[b] for b in names)
+            for name in names_of_button
         ]
+        flippers = len(BUTTONS)  # buttons before these are the flippers'
+        nudges = flippers + 1  # the plunger, then the nudges
         # play looks up exactly the set of keys held, so every combination needs an entry.
         mapping: dict[tuple[int, ...], int | np.ndarray] = {}
         for count in range(1, len(keys) + 1):
             for combination in itertools.combinations(keys, count):
-                pressed = np.zeros(len(BUTTONS), dtype=bool)
-                pressed[[button for _, button in combination]] = True
+                buttons = [button for _, button in combination]
+                if count > self.MAX_CABINET_KEYS and max(buttons) >= flippers:
+                    continue
+                pressed = np.zeros(len(names), dtype=bool)
+                pressed[buttons] = True
                 codes = tuple(sorted(code for code, _ in combination))
                 if self.action_type == "discrete":
-                    # The action whose row of DISCRETE_BUTTONS is the pressed buttons.
-                    mapping[codes] = int(np.flatnonzero((pressed == DISCRETE_BUTTONS).all(1))[0])
+                    held = np.flatnonzero(pressed[nudges:])
+                    pressed[nudges + held[1:]] = False  # the first nudge wins
+                    mapping[codes] = discrete_action(pressed)
                 else:
                     mapping[codes] = pressed.astype(np.int8)
         return mapping

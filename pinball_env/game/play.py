@@ -298,7 +298,7 @@ def cabinet_rules(
             scored += rules.skill_bonus
             skill_left[env] = 0
             skill_shot[env] = True
-    touches = int(cabinet[env, BOB_TOUCHES])
+    touches = 0 if tilted[env] else int(cabinet[env, BOB_TOUCHES])  # a tilted machine is deaf
     if touches > 0:
         warnings[env] += touches
         warning_age[env] = 0

@@ -244,6 +244,7 @@ class Game:
             self.launch(env, rng)
         if options:
             self.world.place_ball(env, position, velocity)
+            self.state.on_plunger[env] = False
             self._moved(env)
 
     def launch(self, env: int, rng: np.random.Generator) -> None:

@@ -6,6 +6,7 @@ Examples::
     python -m pinball_env.tools.plot box --trace 600 --velocity 2.5 1.0 --out outputs/trace.png
     python -m pinball_env.tools.plot procgen:7 --out outputs/procgen7.png
     python -m pinball_env.tools.plot --gallery --difficulty hard --seeds 0 12 --out gallery.png
+    python -m pinball_env.tools.plot classic_v1 --cabinet --out docs/cabinet.png
 
 Needs matplotlib (the ``plot`` extra).
 """
@@ -159,6 +160,84 @@ def plot_gallery(tables: list[Table], out: Path, columns: int = 6) -> Path:
     return out
 
 
+def plot_cabinet(table: Table, out: Path) -> Path:
+    """Write a PNG of the cabinet at work on ``table`` (one with a cabinet): the skill shot's
+    plunge beside a whole stroke, one nudge (the cabinet's offset and the ball's velocity
+    relative to the table), and the plumb bob under nudges left and right in a rhythm, with
+    its ring, the warnings and the tilt."""
+    if not table.has_cabinet:
+        raise ValueError(f"table {table.name!r} has no cabinet")
+    from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
+
+    plt = _pyplot()
+    fig = plt.figure(figsize=(10, 6.2))
+    grid = fig.add_gridspec(2, 2, width_ratios=(1, 1.6))
+    ax = fig.add_subplot(grid[:, 0])
+    draw_table(ax, table, labels=False)
+    rate = table.simulation.frame_rate
+    pull_frames = round(table.plunger.pull_time * rate)
+    for frames, colour in ((pull_frames - 3, "#2a9d8f"), (pull_frames, "#e76f51")):
+        env = PinballEnv(table=table)
+        env.reset(seed=0)
+        path = []
+        for step in range(frames + round(table.plunger.skill_shot.time * rate)):
+            _, _, _, _, info = env.step(4 if step < frames else 0)
+            path.append(info["ball_position"])
+        path = np.array(path)
+        speed = table.plunger.launch_speed(min(frames / pull_frames, 1) * table.plunger.stroke)
+        ax.plot(*path.T, color=colour, lw=1.2, label=f"pull {frames} frames: {speed:.2f} m/s")
+    ax.legend(loc="lower left", fontsize=7)
+    ax.set_title("the plunger: the skill shot and a whole stroke", fontsize=9)
+
+    env = PinballEnv(table=table)
+    # A ball in free flight in the middle of the table.
+    env.reset(seed=0, options={"ball_position": [0.24, 0.42], "ball_velocity": [0.0, 0.3]})
+    game = env.game
+    times, offsets, relative = [], [], []
+    velocity0 = game.world.balls[0, 2]
+    for step in range(24):
+        env.step(8 if step == 5 else 0)  # one nudge left
+        times.append(step / rate)
+        offsets.append(1000 * game.world.state.cabinet[0, 0])
+        relative.append(game.world.balls[0, 2] - velocity0)
+    ax = fig.add_subplot(grid[0, 1])
+    ax.plot(times, offsets, color="#1d3557", label="cabinet offset x [mm]")
+    ax.plot(times, np.array(relative) * 10, color="#e63946",
+            label="ball vx relative to the table x10 [m/s]")  # fmt: skip
+    ax.axhline(0, color="#8d99ae", lw=0.5)
+    ax.legend(fontsize=7)
+    ax.set_title("one NUDGE_LEFT on a ball in free flight: the table moves left under it, "
+                 "and back", fontsize=9)  # fmt: skip
+
+    env = PinballEnv(table=table)
+    env.reset(seed=0)
+    times, angles, warnings, tilts = [], [], [], []
+    for step in range(150):
+        nudge = 8 if (step // 15) % 2 == 0 else 16
+        _, _, _, _, info = env.step(nudge)
+        bob = env.game.world.state.cabinet[0]
+        times.append(step / rate)
+        angles.append(math.degrees(math.hypot(bob[6], bob[7])))
+        warnings.append(info["tilt_warnings"])
+        tilts.append(info["tilted"])
+    ax = fig.add_subplot(grid[1, 1])
+    ax.plot(times, angles, color="#1d3557", label="plumb bob's angle [deg]")
+    ax.axhline(table.tilt.ring_angle, color="#e63946", ls="--", lw=0.8, label="the ring")
+    ax.step(times, warnings, color="#f4a261", where="post", label="warnings")
+    for t, tilted, before in zip(times, tilts, [False, *tilts], strict=False):
+        if tilted and not before:  # a tilt: the ball lost, the next one served
+            ax.axvline(t, color="#e63946", lw=2, alpha=0.5)
+            ax.text(t, table.tilt.ring_angle * 1.05, " TILT", color="#e63946", fontsize=8)
+    ax.set_xlabel("time [s]")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title("nudges left and right every 0.25 s: warnings, then the tilt", fontsize=9)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
 def main(argv: list[str] | None = None) -> Path:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("table", nargs="?", default="box", help="table name or YAML path")
@@ -171,6 +250,9 @@ def main(argv: list[str] | None = None) -> Path:
     )
     parser.add_argument(
         "--gallery", action="store_true", help="draw a grid of generated tables instead"
+    )
+    parser.add_argument(
+        "--cabinet", action="store_true", help="the plunger, a nudge and the tilt at work"
     )
     parser.add_argument(
         "--difficulty", choices=DIFFICULTIES, default="easy", help="of the gallery's tables"
@@ -186,6 +268,10 @@ def main(argv: list[str] | None = None) -> Path:
             parser.error(f"--seeds needs FIRST >= 0 and COUNT >= 1, got {first} {count}")
         tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
         out = plot_gallery(tables, args.out, columns=min(count, 6))
+        print(f"wrote {out}")
+        return out
+    if args.cabinet:
+        out = plot_cabinet(load_any_table(args.table), args.out)
         print(f"wrote {out}")
         return out
     velocity = tuple(args.velocity) if args.velocity else None
