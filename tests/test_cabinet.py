@@ -592,3 +592,17 @@ def test_a_snapshot_restores_the_whole_cabinet():
     env.game.restore(snapshot)
     env.np_random.bit_generator.state = rng_state
     assert play() == first
+
+
+def test_soft_plunges_cannot_keep_a_ball_in_the_shooter_lane(table):
+    """A ball plunged too softly falls back; the time it spends in the lane adds up, and the
+    machine fires it after the ball search's wait, as it would a ball left waiting."""
+    env = gym.make("Pinball-v1").unwrapped
+    env.reset(seed=0)
+    x_plunger = table.plunger.position[0]
+    for step in range(round(BALL_SEARCH_TIME * 60) + 60):
+        _, _, _, _, info = env.step(PLUNGER if step % 50 < 3 else NOOP)
+        if abs(info["ball_position"][0] - x_plunger) > table.ball.radius:
+            break
+    assert info["ball_position"][1] > 0.8  # out over the gate, into the playfield
+    assert step >= round(BALL_SEARCH_TIME * 60) - 1  # ... by the machine, after the wait

@@ -2,8 +2,11 @@
 
 import json
 
+import gymnasium as gym
+import numpy as np
 import pytest
 
+from pinball_env.game.actions import discrete_action
 from pinball_env.tools import crosscheck as cc
 
 
@@ -53,3 +56,63 @@ def test_report_is_written(tmp_path):
     saved = json.loads((tmp_path / "crosscheck.json").read_text())
     assert saved["summary"]["findings"] == report["summary"]["findings"]
     assert (tmp_path / "crosscheck.png").stat().st_size > 10_000
+
+
+def test_tilted_bumpers_do_not_kick_on_either_engine():
+    for row in cc.post_hits([0.0, 0.5, 0.9], restitution=0.9, kick=1.5, tilted=True):
+        for engine in cc.ENGINES:
+            assert cc.agrees(row, engine, row["speed"]), row
+
+
+def test_a_nudge_changes_a_free_balls_velocity_by_the_cabinets_change_opposite():
+    for row in cc.nudge_free_flight(frames=12):
+        for engine in cc.ENGINES:
+            assert row[engine]["contacts"] == 0, row["nudge"]
+            assert row[engine]["max_velocity_error"] <= cc.ROUNDING, (row["nudge"], engine)
+
+
+def test_a_nudge_on_a_ball_in_contact_is_what_each_engines_contact_rules_predict():
+    rows = cc.nudge_contact()
+    assert {row["situation"] for row in rows} == set(cc.NUDGE_SITUATIONS)
+    for row in rows:
+        assert cc.nudge_agrees(row), row
+    # Along the wall: the same friction. Into it: ours bounces, e (J/M + g h) = 0.15 m/s.
+    along = [row for row in rows if row.get("expected_difference") == 0.0]
+    into = [row for row in rows if row.get("expected_difference", 0.0) > 0.0]
+    assert len(along) == 4 and len(into) == 2
+    for row in into:
+        assert row["expected_difference"] == pytest.approx(0.5 * (0.3 + 1.1105 / 600), rel=1e-3)
+
+
+def test_plunger_launches_agree_with_the_analytic_flight():
+    rows = cc.plunger_launches([0.1, 0.25, 0.5, 1.0])
+    assert [row["apex"] is None for row in rows] == [False, False, True, True]
+    for row in rows:
+        for engine in cc.ENGINES:
+            assert cc.plunger_agrees(row, engine), (row, engine)
+        if row["apex"] is not None:  # the integration order: exactly v h apart
+            apart = row["pymunk"]["apex"] - row["swept"]["apex"]
+            assert apart == pytest.approx(row["speed"] * cc.SUBSTEP, rel=1e-6)
+        else:
+            assert abs(row["pymunk"]["gate_time"] - row["swept"]["gate_time"]) <= cc.SUBSTEP
+
+
+def test_pinball_v1_on_pymunk_moves_the_cabinet_as_the_kernel_does():
+    """Plunge, then shake the cabinet until it tilts: the cabinet (which only the nudges move)
+    stays bitwise the same on both engines, frame after frame."""
+    envs = {physics: gym.make("Pinball-v1", physics=physics) for physics in cc.ENGINES}
+    for env in envs.values():
+        env.reset(seed=3)
+    plunge = [discrete_action([False, False, True, False, False, False])] * 40 + [0] * 30
+    shake = [
+        discrete_action([True, True, False, i // 15 % 2 == 0, i // 15 % 2 == 1, False])
+        for i in range(120)
+    ]
+    tilted = dict.fromkeys(cc.ENGINES, False)
+    for action in plunge + shake:
+        for physics, env in envs.items():
+            info = env.step(action)[4]
+            tilted[physics] |= bool(info["tilted"])
+        swept, pymunk = (envs[p].unwrapped.game.world.state.cabinet for p in cc.ENGINES)
+        assert np.array_equal(swept, pymunk)
+    assert tilted == {"swept": True, "pymunk": True}

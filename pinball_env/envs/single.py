@@ -151,10 +151,10 @@ class PinballEnv(CoreAttributes, gym.Env):
     step), ``points`` (this step), ``drained`` (a ball drained this step) and ``frames``
     (frames played in this game).
 
-    **The cabinet's rules** (``Pinball-v1``). A ball left waiting on the plunger for 10 s
-    (BALL_SEARCH_TIME) is fired by the machine at a speed drawn from the plunger's range, so
-    every game still ends; a ball that falls back down the shooter lane waits on the plunger
-    again. The skill shot: the rollover ``skill_lane`` (under the top arch, on the right) is
+    **The cabinet's rules** (``Pinball-v1``). A ball that falls back down the shooter lane
+    waits on the plunger again; a ball that has stayed in the shooter lane for 10 s
+    (BALL_SEARCH_TIME: waiting, or plunged too softly and fallen back) is fired by the machine
+    at a speed drawn from the plunger's range, so every game still ends. The skill shot: the rollover ``skill_lane`` (under the top arch, on the right) is
     lit for 1.25 s after the player's plunge and scores 1000 points if crossed while lit: a
     pull of 56-58 frames (of the 60 of the whole stroke) makes it. The tilt: a plumb bob (a
     0.1 m pendulum) swings with the cabinet; each time it touches its ring (5 degrees from

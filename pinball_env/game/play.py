@@ -136,6 +136,7 @@ def play_frames(
     )
     pull, on_plunger, nudge_wait = state.plunger_pull, state.on_plunger, state.nudge_wait
     warnings, warning_age, skill_left = state.tilt_warnings, state.warning_age, state.skill_left
+    lane_frames = state.lane_frames
     scores, heights, skip_heights = rules.scores, rules.heights, rules.skip_heights
     r2 = rules.radius * rules.radius
     per_env = len(geometries) > 1  # else every env plays the one table
@@ -250,6 +251,13 @@ def play_frames(
                 else:  # (a tilted ball is given up instead, see cabinet_rules)
                     still_frames[env] += 1
                     launch[env] = still_frames[env] >= rules.search_frames and not tilted[env]
+                if rules.cabinet:
+                    # A ball that stays in the shooter lane (plunged too softly, it falls back
+                    # onto the plunger) is fired by the machine once it has been there as long.
+                    in_lane = abs(balls[env, BALL_X] - rules.plunger_x) < rules.radius
+                    lane_frames[env] = lane_frames[env] + 1 if in_lane else 0
+                    if on_plunger[env]:
+                        launch[env] = lane_frames[env] >= rules.search_frames and not tilted[env]
                 stage[env] = CLOSE_FRAME
             elif now == CLOSE_FRAME:  # the frame's reward
                 gone = frame_drained[env]

@@ -72,6 +72,7 @@ class GameState(NamedTuple):
     tilt_warnings: np.ndarray  # (N,) int64: warnings standing
     warning_age: np.ndarray  # (N,) int64: frames since the last warning
     skill_left: np.ndarray  # (N,) int64: frames the skill shot stays lit (0: dark)
+    lane_frames: np.ndarray  # (N,) int64: frames the ball has stayed in the shooter lane
 
 
 class Game:
@@ -134,6 +135,7 @@ class Game:
             tilt_warnings=np.zeros(n_envs, dtype=np.int64),
             warning_age=np.zeros(n_envs, dtype=np.int64),
             skill_left=np.zeros(n_envs, dtype=np.int64),
+            lane_frames=np.zeros(n_envs, dtype=np.int64),
         )
         # The buttons: the flippers', and the cabinet's on a table that has one.
         self.cabinet = table.has_cabinet
@@ -237,7 +239,7 @@ class Game:
             self.world.state.cabinet[env] = 0.0
             self.world.state.tilted[env] = False
             for array in (state.nudge_wait, state.tilt_warnings, state.warning_age,
-                          state.skill_left):  # fmt: skip
+                          state.skill_left, state.lane_frames):  # fmt: skip
                 array[env] = 0
             self.serve(env)
         else:

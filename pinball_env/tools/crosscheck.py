@@ -7,7 +7,10 @@ Runs the same scenarios on both engines (the same validated table object, built 
 Scenarios: single-wall bounces over a grid of angles and speeds; segment-end (corner) hits;
 post hits; a ball falling on a resting flipper; a swinging flipper hit; a free run on the classic
 table; and a tunnelling sweep (pass-through fraction against speed, for a thin wall, a resting
-flipper and a swinging flipper). Needs the ``crosscheck`` extra (pymunk, matplotlib).
+flipper and a swinging flipper). The cabinet (classic_v1's): bumper hits on a tilted machine;
+nudges on a ball in free flight, and on one resting on or rolling along a wall or lying in a
+flipper's cradle; plunger launches up the shooter lane. Needs the ``crosscheck`` extra (pymunk,
+matplotlib).
 
 Tolerances, fixed from how the engines work (not tuned to the results):
 
@@ -24,7 +27,18 @@ Tolerances, fixed from how the engines work (not tuned to the results):
   resolves the contact after the flipper has already swept into the ball, one substep late at
   worst; the hit speeds agree to 10% (a substep of a 40 rad/s flipper is 0.07 rad);
 - free run: the trajectories are chaotic (every bounce off a curved post amplifies a difference),
-  so they are compared by how long they stay within 1 mm and 1 cm of each other, not by a bound.
+  so they are compared by how long they stay within 1 mm and 1 cm of each other, not by a bound;
+- the cabinet is the kernel's own function on both engines, so it moves bitwise the same; a ball
+  in free flight adds its velocity change, opposite, in the same substeps: both agree with it to
+  rounding (ROUNDING). A nudge along a wall: both apply the same Coulomb friction with the normal
+  impulse of the substep's gravity, so they agree to rounding. A nudge into a surface differs by
+  design (see :func:`nudge_contact`): by ``e (J/M + g h)`` on a wall exactly, and in a cradle by
+  at most its largest restitution times that approach, plus what the settling left;
+- plunger launches: each engine's path is the analytic parabola of launch speed ``v -/+ g h / 2``
+  (the integration order), so the apex is within half a substep's travel at the launch speed,
+  ``v h / 2`` (plus ``g h^2 / 8``), of the analytic one, the engines ``v h`` apart; the time to
+  the gate within half a substep, h / 2 (the paths are ``g h t / 2`` off, which the ball covers in
+  under h / 2 while it is faster than the speed it has lost).
 """
 
 import argparse
@@ -36,7 +50,18 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.game.actions import NUDGE_DIRECTIONS
+from pinball_env.physics.columns import (
+    BALL_SPIN,
+    BALL_VX,
+    BALL_VY,
+    BALL_X,
+    BALL_Y,
+    CABINET_SHOVE_X,
+    CABINET_SHOVE_Y,
+    CABINET_VX,
+    CABINET_VY,
+)
 from pinball_env.physics.flipper import flipper_distance
 from pinball_env.sim.backends import make_world
 from pinball_env.sim.world import World
@@ -53,6 +78,9 @@ DROP_TIME_TOLERANCE = 2 * SUBSTEP
 VELOCITY_TOLERANCE = (0.01, 0.001)  # relative to the incoming speed, absolute [m/s]
 FLIPPER_TOLERANCE = 0.10  # relative
 HIT_TIME = 0.1  # [s] every aimed scenario is set up to meet its target after this time
+# Agreement to rounding [m/s, m]: both engines do the same arithmetic, in another order.
+ROUNDING = 1e-9
+CABINET_TABLE = "classic_v1"  # the table in the whole cabinet (plunger, nudge, tilt)
 
 
 def classic_left_flipper() -> dict[str, Any]:
@@ -75,10 +103,22 @@ def scenario_table(
     restitution: float = 0.5,
     friction: float = 0.0,
     slope_deg: float = 0.0,
+    cabinet: bool = False,
 ) -> Table:
-    """A 1 m x 1 m open table with the given elements and no outline."""
+    """A 1 m x 1 m open table with the given elements and no outline; with ``cabinet``, in
+    CABINET_TABLE's cabinet (its plunger, without the skill shot, in a corner)."""
+    whole_cabinet = {}
+    if cabinet:
+        entries = table_to_dict(load_table(CABINET_TABLE))
+        plunger = {key: value for key, value in entries["plunger"].items() if key != "skill_shot"}
+        whole_cabinet = {
+            "plunger": {**plunger, "position": [0.95, 0.05]},
+            "cabinet": entries["cabinet"],
+            "tilt": entries["tilt"],
+        }
     return table_from_dict(
         {
+            **whole_cabinet,
             "name": "crosscheck",
             "playfield": {"width": 1.0, "height": 1.0},
             "slope_deg": slope_deg,
@@ -205,13 +245,20 @@ def corner_hits(offsets: list[float], speed: float = 2.0, restitution: float = 0
 
 
 def post_hits(
-    offsets: list[float], speed: float = 2.0, restitution: float = 0.5, kick: float = 0.0
+    offsets: list[float],
+    speed: float = 2.0,
+    restitution: float = 0.5,
+    kick: float = 0.0,
+    tilted: bool = False,
 ) -> list:
     """A ball hits a 1 cm post with impact parameter ``offset`` x (ball + post radius); with a
-    ``kick`` it is a pop bumper, which adds that speed along the contact normal."""
+    ``kick`` it is a pop bumper, which adds that speed along the contact normal, unless the
+    machine is ``tilted`` (its kickers dead)."""
     post_radius = 0.01
     table = scenario_table(posts=[([0.5, 0.3], post_radius, kick)], restitution=restitution)
     worlds = {engine: make_world(table, 1, engine) for engine in ENGINES}
+    for world in worlds.values():
+        world.state.tilted[0] = tilted
     reach = RADIUS + post_radius
     rows = []
     for offset in offsets:
@@ -221,8 +268,8 @@ def post_hits(
         velocity = np.array([0.0, -speed])
         start = target - velocity * HIT_TIME
         shots = {e: shoot(w, tuple(start), tuple(velocity), 10) for e, w in worlds.items()}
-        expected = reflect(velocity, normal, restitution) + kick * normal
-        row = {"offset": offset, "speed": speed, "kick": kick}
+        expected = reflect(velocity, normal, restitution) + (0.0 if tilted else kick) * normal
+        row = {"offset": offset, "speed": speed, "kick": kick, "tilted": tilted}
         rows.append({**row, **compare(expected, shots, speed)})
     return rows
 
@@ -382,6 +429,205 @@ def tunnelling(speeds: list[float], trials: int, seed: int = 0) -> dict[str, Any
     return result
 
 
+# --- the cabinet: nudges, the tilt and the player's plunger -------------------------------------
+
+
+def nudge(world: World, direction: tuple[float, float], impulse: float) -> None:
+    """The game's nudge on env 0: a shove of ``impulse`` [N s] along ``direction`` (a unit
+    vector), which the cabinet takes in its next substep."""
+    world.state.cabinet[0, [CABINET_SHOVE_X, CABINET_SHOVE_Y]] = impulse * np.array(direction)
+
+
+def nudge_free_flight(frames: int = 20) -> list:
+    """A ball in free flight over the classic_v1 playfield when the cabinet is nudged: relative
+    to the table it must change velocity by the cabinet's change, opposite (beside gravity)."""
+    table = load_table(CABINET_TABLE)
+    impulse, gravity = table.cabinet.nudge_impulse, np.array(table.gravity_vector)
+    start, velocity = (0.25, 0.42), np.array([0.1, 0.5])  # clear of everything for 20 frames
+    rows = []
+    for name, direction in NUDGE_DIRECTIONS.items():
+        row: dict[str, Any] = {"nudge": name, "frames": frames}
+        for engine in ENGINES:
+            world = make_world(table, 1, engine)
+            world.place_ball(0, start, tuple(velocity))
+            nudge(world, direction, impulse)
+            ball, cabinet, contacts = [], [], 0
+            for frame in range(frames):
+                world.step()
+                contacts += int(world.state.contact_count[0])
+                time = (frame + 1) / FRAME_RATE
+                ball.append(world.balls[0, [BALL_VX, BALL_VY]] - velocity - gravity * time)
+                cabinet.append(world.state.cabinet[0, [CABINET_VX, CABINET_VY]].copy())
+            # The cabinet starts at rest: its velocity is its velocity change.
+            error = np.abs(np.array(ball) + np.array(cabinet)).max()
+            row[engine] = {
+                "max_velocity_error": float(error),
+                "contacts": contacts,
+                "ball_velocity_change": np.array(ball).tolist(),
+                "cabinet_velocity": np.array(cabinet).tolist(),
+            }
+        rows.append(row)
+    return rows
+
+
+def _floor_table() -> Table:
+    """A long wooden floor (wall at y = 0.3) on the tilted 1 m table, in a cabinet."""
+    floor = [[[0.02, 0.3], [0.98, 0.3]]]
+    return scenario_table(walls=floor, restitution=0.5, friction=0.3, slope_deg=6.5, cabinet=True)
+
+
+def _resting(world: World) -> np.ndarray | None:
+    """A ball at rest on the floor, no buttons held."""
+    world.place_ball(0, (0.5, 0.3 + RADIUS), (0.0, 0.0))
+    return None
+
+
+def _rolling(world: World) -> np.ndarray | None:
+    """A ball rolling along the floor at 0.5 m/s, no buttons held."""
+    world.place_ball(0, (0.3, 0.3 + RADIUS), (0.5, 0.0))
+    world.balls[0, BALL_SPIN] = -0.5 / RADIUS  # rolling: no slip at the contact point
+    return None
+
+
+def _cradled(world: World) -> np.ndarray | None:
+    """A ball dropped into the raised left flipper's cradle on classic_v1, the button held."""
+    buttons = LEFT_BUTTON
+    for _ in range(4):  # the left flipper up against its stop
+        world.step(buttons)
+    world.place_ball(0, (0.17, 0.2), (0.0, 0.0))  # it rolls down into the cradle
+    return buttons
+
+
+# name: (table, set up env 0 (returns the buttons it holds), frames to settle, the surface's
+# normal (None: several surfaces), its restitution (the largest of them))
+NUDGE_SITUATIONS = {
+    "resting on a wall": (_floor_table, _resting, 30, (0.0, 1.0), 0.5),
+    "rolling along a wall": (_floor_table, _rolling, 10, (0.0, 1.0), 0.5),
+    "in a flipper's cradle": (lambda: load_table(CABINET_TABLE), _cradled, 180, None, 0.8),
+}
+
+
+def nudge_contact() -> list:
+    """A ball resting on or rolling along a wall, or lying in a raised flipper's cradle on
+    classic_v1, settled, then nudged: its velocity one frame after the shove on both engines.
+
+    Along the surface both engines apply the same Coulomb friction with the normal impulse of
+    the substep's gravity, so they agree to rounding. A shove into the surface is an impact on
+    ours (the shove's whole velocity change comes in one substep), bounced with restitution
+    ``e``; pymunk fixes a contact's bounce from the velocities before the substep's velocity
+    update (``cpArbiterPreStep``), so to it the same shove is a push: ours leaves at
+    ``e (J/M + g h)`` more. In the cradle (a flipper, a guide) the difference is at most the
+    largest restitution times that approach, plus the difference the settling left.
+    """
+    rows = []
+    for situation, (make_table, setup, settle, normal, restitution) in NUDGE_SITUATIONS.items():
+        table = make_table()
+        impulse, mass = table.cabinet.nudge_impulse, table.cabinet.mass
+        gravity = np.array(table.gravity_vector)
+        for name, direction in NUDGE_DIRECTIONS.items():
+            before, after = {}, {}
+            for engine in ENGINES:
+                world = make_world(table, 1, engine)
+                buttons = setup(world)
+                for _ in range(settle):
+                    world.step(buttons)
+                before[engine] = world.balls[0, [BALL_VX, BALL_VY]].copy()
+                nudge(world, direction, impulse)
+                world.step(buttons)
+                after[engine] = world.balls[0, [BALL_VX, BALL_VY]].copy()
+            difference = float(np.linalg.norm(after["swept"] - after["pymunk"]))
+            settled = float(np.linalg.norm(before["swept"] - before["pymunk"]))
+            row: dict[str, Any] = {
+                "situation": situation,
+                "nudge": name,
+                "velocity_before": {e: v.tolist() for e, v in before.items()},
+                "velocity": {e: v.tolist() for e, v in after.items()},
+                "difference": difference,
+            }
+            if normal is None:
+                approach = impulse / mass + float(np.linalg.norm(gravity)) * SUBSTEP
+                row["bound"] = restitution * approach + settled
+            else:  # our rebound off a surface the shove drives into the ball
+                into = float(np.dot(direction, normal))
+                approach = impulse / mass * into - float(gravity @ normal) * SUBSTEP
+                row["expected_difference"] = restitution * approach if into > 0.0 else 0.0
+            rows.append(row)
+    return rows
+
+
+def nudge_agrees(row: dict[str, Any]) -> bool:
+    """Whether a :func:`nudge_contact` row is what the engines' contact rules predict."""
+    if "bound" in row:
+        return row["difference"] <= row["bound"]
+    return abs(row["difference"] - row["expected_difference"]) <= ROUNDING
+
+
+def plunger_launches(pulls: list[float]) -> list:
+    """The player's plunger on classic_v1 let go at ``pulls`` (fractions of its stroke): the
+    ball flies straight up the shooter lane, touching nothing, to its apex below the gate or
+    across the gate's hinge (the top of the lane's wall). Against the analytic parabola, on
+    both engines.
+
+    Each engine's frames sample the exact parabola of launch speed ``v -/+ g h / 2``
+    (velocities first: minus; positions first: plus), so a parabola through the last three
+    frames gives its apex and its gate time exactly.
+    """
+    table = load_table(CABINET_TABLE)
+    plunger = table.plunger
+    g = -table.gravity_vector[1]
+    y0 = plunger.position[1]
+    gate_y = next(wall for wall in table.walls if wall.name == "gate").points[0][1]
+    rows = []
+    for pull in pulls:
+        speed = plunger.launch_speed(pull * plunger.stroke)
+        rise = gate_y - y0
+        crosses = speed * speed > 2.0 * g * rise
+        expected_time = (speed - math.sqrt(speed * speed - 2.0 * g * rise)) / g if crosses else None
+        row: dict[str, Any] = {
+            "pull": pull,
+            "speed": speed,
+            "apex": None if crosses else y0 + speed * speed / (2.0 * g),
+            "gate_time": expected_time,
+            "gate_speed": None if not crosses else speed - g * expected_time,
+        }
+        if crosses:
+            row["gate_time_tolerance"] = SUBSTEP / 2.0
+        else:  # (v -/+ g h / 2)^2 / 2 g: half a substep's travel at the launch speed, and a bit
+            row["apex_tolerance"] = speed * SUBSTEP / 2.0 + g * SUBSTEP**2 / 8.0 + ROUNDING
+        for engine in ENGINES:
+            world = make_world(table, 1, engine)
+            world.launch(0, speed)
+            times, heights, contacts = [0.0], [y0], 0
+            while heights[-1] < gate_y and (len(heights) < 3 or heights[-1] > heights[-2]):
+                world.step()
+                contacts += int(world.state.contact_count[0])
+                times.append(len(times) / FRAME_RATE)
+                heights.append(float(world.balls[0, BALL_Y]))
+            a, b, c = np.polyfit(times[-3:], heights[-3:], 2)
+            if crosses:
+                roots = np.roots([a, b, c - gate_y]).real
+                result = {"gate_time": float(roots[(roots > times[-2]) & (roots <= times[-1])][0])}
+            else:
+                result = {"apex": float(c - b * b / (4.0 * a))}
+            row[engine] = {**result, "contacts": contacts}
+        rows.append(row)
+    return rows
+
+
+def plunger_agrees(row: dict[str, Any], engine: str) -> bool:
+    """Whether ``engine``'s launch is within the stated tolerance of the analytic one: the
+    apex within half a substep's travel at the launch speed; the gate time within half a
+    substep (the path is g h t / 2 off, which the ball, still faster at the gate than the
+    speed it has lost, covers in under h / 2)."""
+    result = row[engine]
+    if result["contacts"]:
+        return False
+    if row["apex"] is not None:
+        return abs(result["apex"] - row["apex"]) <= row["apex_tolerance"]
+    keeps_more = row["gate_speed"] > row["speed"] - row["gate_speed"]
+    return keeps_more and abs(result["gate_time"] - row["gate_time"]) <= row["gate_time_tolerance"]
+
+
 # --- the report ---------------------------------------------------------------------------------
 
 
@@ -396,6 +642,8 @@ def run(out: Path, trials: int = 100, free_frames: int = 600) -> dict[str, Any]:
             "velocity_relative": VELOCITY_TOLERANCE[0],
             "velocity_absolute_m_per_s": VELOCITY_TOLERANCE[1],
             "flipper_relative": FLIPPER_TOLERANCE,
+            "rounding": ROUNDING,
+            "plunger_gate_time_s": SUBSTEP / 2.0,
         },
         "wall_bounces": wall_bounces([0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0], angles),
         "corner_hits": corner_hits([0.2, 0.4, 0.6, 0.8, 0.95]),
@@ -405,6 +653,12 @@ def run(out: Path, trials: int = 100, free_frames: int = 600) -> dict[str, Any]:
         "flipper_swing": flipper_swing([0.02, 0.035, 0.05, 0.06]),
         "free_run": free_run(free_frames),
         "tunnelling": tunnelling([1.0, 3.0, 10.0, 20.0, 30.0, 50.0, 100.0, 300.0, 1000.0], trials),
+        "tilted_bumper_hits": post_hits(
+            [0.0, 0.3, 0.6, 0.9], restitution=0.9, kick=1.5, tilted=True
+        ),
+        "nudge_free_flight": nudge_free_flight(),
+        "nudge_contact": nudge_contact(),
+        "plunger": plunger_launches([0.1, 0.2, 0.25, 0.5, 0.75, 1.0]),
     }
     report["summary"] = summarise(report)
     print_report(report)
@@ -451,6 +705,35 @@ def summarise(report: dict[str, Any]) -> dict[str, Any]:
             for target in ("wall", "resting flipper", "swinging flipper")
         },
         "free_run_diverges_1cm_at_s": report["free_run"]["diverges_1cm_at"],
+        **_cabinet_summary(report),
+    }
+
+
+def _cabinet_summary(report: dict[str, Any]) -> dict[str, Any]:
+    """The headline figures of the cabinet's scenarios: nudges, the plunger, the tilt."""
+    plunger = report["plunger"]
+
+    def apart(key: str) -> float:
+        return max(abs(r["swept"][key] - r["pymunk"][key]) for r in plunger if r[key] is not None)
+
+    contact: dict[str, dict[str, float]] = {}
+    for row in report["nudge_contact"]:
+        contact.setdefault(row["situation"], {})[row["nudge"]] = row["difference"]
+    return {
+        "tilted_bumper_hits_within_tolerance": {
+            e: _share(report["tilted_bumper_hits"], e) for e in ENGINES
+        },
+        "nudge_free_flight_max_velocity_error_m_per_s": {
+            e: max(row[e]["max_velocity_error"] for row in report["nudge_free_flight"])
+            for e in ENGINES
+        },
+        "nudge_contact_velocity_difference_m_per_s": contact,
+        "nudge_contact_as_predicted": all(nudge_agrees(row) for row in report["nudge_contact"]),
+        "plunger_within_tolerance": {
+            e: sum(plunger_agrees(row, e) for row in plunger) / len(plunger) for e in ENGINES
+        },
+        "plunger_max_apex_difference_m": apart("apex"),
+        "plunger_max_gate_time_difference_s": apart("gate_time"),
     }
 
 
@@ -496,6 +779,39 @@ def _findings(
         "Free run: the paths drift apart by g h t until the first contact, where the "
         "one-substep detection delay separates them by "
         f"1 cm at {report['free_run']['diverges_1cm_at']} s; from there it is chaotic.",
+        *_cabinet_findings(report),
+    ]
+
+
+def _cabinet_findings(report: dict[str, Any]) -> list[str]:
+    """The cabinet's findings in words, each computed from the measured results."""
+    summary = _cabinet_summary(report)
+    tilted = summary["tilted_bumper_hits_within_tolerance"]
+    flight = summary["nudge_free_flight_max_velocity_error_m_per_s"]
+    walls = [row for row in report["nudge_contact"] if "expected_difference" in row]
+    along = max(row["difference"] for row in walls if row["expected_difference"] == 0.0)
+    into = max(row["difference"] for row in walls if row["expected_difference"] > 0.0)
+    cradle = max(row["difference"] for row in report["nudge_contact"] if "bound" in row)
+    plunger = summary["plunger_within_tolerance"]
+    return [
+        f"{'Agree' if min(tilted.values()) == 1.0 else 'DISAGREE'}: a tilted machine's bumpers "
+        f"do not kick; share of shots within tolerance of the plain bounce: {tilted}.",
+        f"{'Agree' if max(flight.values()) <= ROUNDING else 'DISAGREE'}: a nudge changes the "
+        "velocity of a ball in free flight by the cabinet's change, opposite, to "
+        f"{flight['swept']:.1e} m/s (swept) and {flight['pymunk']:.1e} m/s (pymunk).",
+        f"{'Agree' if along <= ROUNDING else 'DISAGREE'}: a nudge along a wall on a ball resting "
+        f"on it or rolling along it: the engines' velocities differ by {along:.1e} m/s (the "
+        "same friction on the same normal impulse).",
+        f"{'Differ, by design' if summary['nudge_contact_as_predicted'] else 'DISAGREE'}: a "
+        "nudge into a surface is an impact for ours and a push for pymunk (which fixes a "
+        "contact's bounce before the substep's velocity change): a ball on a wall leaves "
+        f"{into:.3f} m/s faster in ours, e (J/M + g h); in a raised flipper's cradle the "
+        f"engines end up to {cradle:.3f} m/s apart.",
+        f"{'Agree' if min(plunger.values()) == 1.0 else 'DISAGREE'}: plunger launches on "
+        f"{CABINET_TABLE} reach apexes {1e3 * summary['plunger_max_apex_difference_m']:.2f} mm "
+        "apart (v h, the integration order) and cross the gate "
+        f"{1e3 * summary['plunger_max_gate_time_difference_s']:.2f} ms apart; share within "
+        f"tolerance of the analytic flight: {plunger}.",
     ]
 
 
@@ -503,6 +819,7 @@ def print_report(report: dict[str, Any]) -> None:
     """The report as tables on the terminal, then the summary."""
     _print_bounces(report)
     _print_flippers(report)
+    _print_cabinet(report)
     free = report["free_run"]
     print(
         f"\nFree run on the classic table ({free['frames']} frames, plunger {free['launch_speed']}"
@@ -547,6 +864,7 @@ def _print_bounces(report: dict[str, Any]) -> None:
         ("Corner hits", "offset"),
         ("Post hits", "offset"),
         ("Bumper hits", "offset"),
+        ("Tilted bumper hits", "offset"),
     ):
         rows = report[name.lower().replace(" ", "_")]
         print(f"\n{name}: velocity error [% of speed] vs analytic")
@@ -578,6 +896,43 @@ def _print_flippers(report: dict[str, Any]) -> None:
         )
 
 
+def _print_cabinet(report: dict[str, Any]) -> None:
+    """The nudge and plunger scenarios: against the analytic answer, engine against engine."""
+
+    def vector(v: list[float]) -> str:
+        return f"({v[0]:+.4f}, {v[1]:+.4f})"
+
+    print(
+        f"\nNudge on a ball in free flight ({CABINET_TABLE}'s cabinet): max |ball dv + cabinet dv|"
+    )
+    for row in report["nudge_free_flight"]:
+        errors = "   ".join(f"{e} {row[e]['max_velocity_error']:.1e} m/s" for e in ENGINES)
+        print(f"  {row['nudge']:>11} over {row['frames']} frames: {errors}")
+    print("\nNudge on a ball in contact: velocity [m/s] one frame after the shove")
+    print(f"  {'situation':>21} {'nudge':>11} | {'swept':>18} {'pymunk':>18} | difference")
+    for row in report["nudge_contact"]:
+        v = row["velocity"]
+        predicted = (
+            f"(at most {row['bound']:.4f})"
+            if "bound" in row
+            else f"(predicted {row['expected_difference']:.4f})"
+        )
+        print(
+            f"  {row['situation']:>21} {row['nudge']:>11} | {vector(v['swept'])} "
+            f"{vector(v['pymunk'])} | {row['difference']:.4f} {predicted}"
+        )
+    print(f"\nPlunger launches on {CABINET_TABLE}: apex [m] or time to the gate [ms]")
+    print(f"  {'pull':>4} {'speed':>5} | {'analytic':>9} {'swept':>9} {'pymunk':>9} | tolerance")
+    for row in report["plunger"]:
+        if row["apex"] is not None:
+            key, scale, unit = "apex", 1.0, f"{row['apex_tolerance']:.5f} m"
+        else:
+            key, scale, unit = "gate_time", 1e3, f"{1e3 * row['gate_time_tolerance']:.3f} ms"
+        values = [row[key]] + [row[e][key] for e in ENGINES]
+        cells = " ".join(f"{scale * value:9.5f}" for value in values)
+        print(f"  {row['pull']:4.2f} {row['speed']:5.3f} | {cells} | {unit}")
+
+
 def _label(ax: Any, title: str, ylabel: str, log: str) -> None:
     """A panel against ball speed: its title, axis labels, log scales on the axes in ``log``
     (``"x"``, ``"xy"``) and legend."""
@@ -595,7 +950,7 @@ def plot(report: dict[str, Any], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    fig, axes = plt.subplots(3, 2, figsize=(11, 12))
     ax = axes[0, 0]
     tunnel = report["tunnelling"]
     styles = {"wall": "-", "resting flipper": "--", "swinging flipper": ":"}
@@ -635,10 +990,47 @@ def plot(report: dict[str, Any], path: Path) -> None:
         ax.plot(p[:, 0], p[:, 1], color=colour, lw=0.8, label=engine)
     ax.legend(fontsize=7, loc="upper left")
     ax.set_title("Free run paths")
+    _plot_cabinet(report, axes[2])
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+def _plot_cabinet(report: dict[str, Any], axes: Any) -> None:
+    """The nudge in free flight (the right nudge) and the plunger launches against analytic."""
+    ax = axes[0]
+    row = next(row for row in report["nudge_free_flight"] if row["nudge"] == "nudge_right")
+    time = np.arange(1, row["frames"] + 1) / FRAME_RATE
+    ax.plot(time, -np.array(row["swept"]["cabinet_velocity"])[:, 0], color="grey", lw=4,
+            alpha=0.4, label="-cabinet velocity")  # fmt: skip
+    for engine, colour, style in zip(ENGINES, ("tab:blue", "tab:red"), ("-", ":"), strict=True):
+        dv = np.array(row[engine]["ball_velocity_change"])[:, 0]
+        ax.plot(time, dv, style, color=colour, label=f"{engine}: ball")
+    ax.set_xlabel("time after the nudge [s]")
+    ax.set_ylabel("velocity change along x [m/s]")
+    ax.set_title("Nudge right: a ball in free flight, relative to the table")
+    ax.legend(fontsize=7)
+
+    ax = axes[1]
+    rows = report["plunger"]
+    width = 0.35
+    for k, (engine, colour) in enumerate(zip(ENGINES, ("tab:blue", "tab:red"), strict=True)):
+        errors = [
+            (r[engine]["apex"] - r["apex"]) / (r["speed"] * SUBSTEP)
+            if r["apex"] is not None
+            else (r[engine]["gate_time"] - r["gate_time"]) / SUBSTEP
+            for r in rows
+        ]
+        ax.bar(np.arange(len(rows)) + (k - 0.5) * width, errors, width, color=colour,
+               label=engine)  # fmt: skip
+    ax.set_xticks(np.arange(len(rows)), [f"{r['pull']:g}" for r in rows])
+    ax.axhline(0.5, color="grey", ls="--", label="tolerance")
+    ax.axhline(-0.5, color="grey", ls="--")
+    ax.set_xlabel("plunger pull [fraction of the stroke]")
+    ax.set_ylabel("error [substeps: apex / (v h), gate time / h]")
+    ax.set_title(f"Plunger launches on {CABINET_TABLE} vs analytic")
+    ax.legend(fontsize=7)
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:

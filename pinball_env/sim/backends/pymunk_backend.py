@@ -17,7 +17,12 @@ instead of the swept kernel: one ``pymunk.Space`` per env, built from the same v
   per new contact, and what counts as a hit is the kernel's rule (``is_hit``);
 - gravity, frame rate and substeps are the table's; sensors and the drain are the kernel's own
   crossing test and bookkeeping (``record_crossings``) on the ball centre's path over each
-  substep.
+  substep;
+- the cabinet (a table with one) is the kernel's own: each substep advances it by
+  :func:`~pinball_env.physics.cabinet.cabinet_substep`, and the ball, simulated relative to the
+  cabinet as in the kernel, feels its acceleration ``-dv / h`` beside gravity (the space's
+  gravity for that substep: the ball is the space's only dynamic body); a tilted machine's
+  kickers are dead (``state.tilted``), as in the kernel.
 
 What pymunk does not have, and the cross-check measures: continuous collision (it finds overlaps
 after they happen, so a fast ball can pass through a thin wall or a flipper within one substep),
@@ -35,12 +40,14 @@ import numpy as np
 
 from pinball_env.extras import require
 from pinball_env.physics import capsule_face_normal, first_circle, first_flipper
+from pinball_env.physics.cabinet import cabinet_substep
 from pinball_env.physics.columns import (
     BALL_SPIN,
     BALL_VX,
     BALL_VY,
     BALL_X,
     BALL_Y,
+    BOB_TOUCHES,
     PROP_FRICTION,
     PROP_KICK,
     PROP_RESTITUTION,
@@ -104,6 +111,7 @@ class _EnvSpace:
         self.space = space
         self.time = 0.0  # seconds since the start of the frame, for the contact log
         self.pending_kicks: list[tuple[float, float, float]] = []
+        self.kick_scale = 1.0  # 0 while the machine is tilted (its kickers dead)
 
         static = space.static_body
         for element, (x0, y0, x1, y1) in enumerate(geometry.segments):
@@ -172,11 +180,12 @@ class _EnvSpace:
         vx, vy = self.ball.velocity
         speed = max(-((vx - surface.x) * nx + (vy - surface.y) * ny), 0.0)
         state = self.world.state
+        kick = self.kick_scale * other.kick
         log_contact(state, self.env, other.element, self.time, speed)
-        if is_hit(speed, other.kick, self.world.settings.resting_speed):
+        if is_hit(speed, kick, self.world.settings.resting_speed):
             state.hits[self.env, other.element] += 1
-        if other.kick > 0.0:
-            self.pending_kicks.append((other.kick, nx, ny))
+        if kick > 0.0:
+            self.pending_kicks.append((kick, nx, ny))
 
     # --- one frame ----------------------------------------------------------------------------
 
@@ -186,11 +195,21 @@ class _EnvSpace:
         h = settings.dt / settings.substeps
         state.contact_count[env] = 0
         state.hits[env, :] = 0
+        cabinet = world.tables.geometry_of(env).cabinet
+        if cabinet.shape[0] > 0:
+            state.cabinet[env, BOB_TOUCHES] = 0.0
+        self.kick_scale = 0.0 if state.tilted[env] else 1.0
+        gravity_x, gravity_y = settings.gravity_x, settings.gravity_y
         self._sync_ball_in()
         angle, omega = state.flipper_angle[env], state.flipper_omega[env]
         flippers, commands = geometry.flippers, state.flipper_command[env]
         for k in range(settings.substeps):
             self.time = k * h
+            if cabinet.shape[0] > 0:
+                # The kernel's cabinet, whether or not a ball is in play; relative to it the
+                # ball feels its acceleration, opposite, beside gravity (a frame force).
+                dvx, dvy = cabinet_substep(state.cabinet[env], cabinet[0], h)
+                self.space.gravity = (gravity_x - dvx / h, gravity_y - dvy / h)
             # The kernel's flipper schedule, never held (pymunk has no wedge rule).
             for j, body in enumerate(self.flipper_bodies):
                 start = angle[j]
