@@ -15,7 +15,15 @@ from gymnasium import spaces
 from numba import njit
 
 from pinball_env.game import Game
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, CABINET_VX, CABINET_X
+from pinball_env.physics.columns import (
+    BALL_VX,
+    BALL_VY,
+    BALL_X,
+    BALL_Y,
+    CABINET_VX,
+    CABINET_X,
+    CABINET_Y,
+)
 from pinball_env.physics.rays import cast_all_rays
 from pinball_env.render import Renderer
 from pinball_env.sim.tables import flipper_numbers
@@ -139,7 +147,7 @@ class ImageObserver:
         if not world.tables.varied:
             return self.renderers(world.table).frames(
                 state.balls, self.game.in_play, state.flipper_angle, grayscale=self.grayscale,
-                threads=world.threads,
+                threads=world.threads, **self._cabinet(slice(None)),
             )  # fmt: skip
         frames = []
         for env in range(world.n_envs):
@@ -147,9 +155,21 @@ class ImageObserver:
             renderer = self.renderers(world.table_of(env))
             frames.append(renderer.frames(
                 state.balls[one], self.game.in_play[one], state.flipper_angle[one],
-                grayscale=self.grayscale,
+                grayscale=self.grayscale, **self._cabinet(one),
             ))  # fmt: skip
         return np.concatenate(frames)
+
+    def _cabinet(self, envs: slice) -> dict[str, np.ndarray]:
+        """The cabinet as the picture shows it (true scale): the plunger pulled back, a ball
+        waiting on it, the cabinet's offset; nothing for a table without a cabinet."""
+        if not self.game.cabinet:
+            return {}
+        game, cabinet = self.game.state, self.game.world.state.cabinet
+        return {
+            "plunger_pull": game.plunger_pull[envs],
+            "on_plunger": game.on_plunger[envs],
+            "cabinet_offset": cabinet[envs, CABINET_X : CABINET_Y + 1],
+        }
 
 
 Observer = StateObserver | ImageObserver

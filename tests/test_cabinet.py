@@ -583,7 +583,7 @@ def test_a_snapshot_restores_the_whole_cabinet():
 
     def play():
         out = []
-        for action in [0] + rhythm(200):
+        for action in [0, *rhythm(200)]:
             obs, reward, _, _, info = env.step(action)
             out.append((obs.tobytes(), reward, info["tilt_warnings"], info["tilted"]))
         return out

@@ -1,6 +1,7 @@
 """Playing by hand: the keyboard map (PinballEnv.get_keys_to_action), gymnasium.utils.play on
-Pinball-v0, and the play tool (pinball_env.tools.play): keys, pause, restart, quit, recordings
-and their replays, driven headless by events posted to pygame's queue."""
+Pinball-v0 and Pinball-v1, and the play tool (pinball_env.tools.play): keys (the cabinet's too),
+pause, restart, quit, recordings and their replays, driven headless by events posted to
+pygame's queue."""
 
 import os
 
@@ -24,12 +25,16 @@ import pytest
 from gymnasium.error import DependencyNotInstalled
 
 import pinball_env
+from pinball_env.table import load_table
 from pinball_env.tools import play
 
 pygame = pytest.importorskip("pygame")
 
 LEFT_KEYS = (pygame.K_LSHIFT, pygame.K_z, pygame.K_LEFT)
 RIGHT_KEYS = (pygame.K_RSHIFT, pygame.K_m, pygame.K_RIGHT)
+PLUNGER_KEYS = (pygame.K_DOWN, pygame.K_RETURN)
+NUDGE_KEYS = ((pygame.K_x,), (pygame.K_n,), (pygame.K_UP, pygame.K_b))  # left, right, up
+CABINET_KEYS = (*PLUNGER_KEYS, *(key for keys in NUDGE_KEYS for key in keys))
 LEFT, RIGHT = 4, 5  # the flipper angles' indices in the state observation
 
 
@@ -281,7 +286,8 @@ def _delete(key: str) -> Callable[[dict[str, Any]], None]:
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
-        (_set("version", 2), r"format version 2; this pinball-env reads version 1"),
+        (_set("version", 3), r"format version 3; this pinball-env reads versions 1 and 2"),
+        (_set("version", True), r"format version True; this pinball-env reads versions"),
         (_set("format", "other"), r"not a pinball recording \(format 'other'"),
         (_set("package_version", "0.0.1"), r"recorded with pinball-env 0\.0\.1, this is"),
         (_delete("games"), r"missing key games"),
@@ -290,11 +296,12 @@ def _delete(key: str) -> Callable[[dict[str, Any]], None]:
         (_set("games", 0, "score", True), r"games\[0\]\.score must be int, got true"),
         (_set("games", 1, "actions", "0124"), r"games\[1\]\.actions: '4' at step 3"),
         (_set("games", 1, "actions", "01-1"), r"'-' at step 2 is not an action"),
+        (_set("games", 1, "actions", "01a"), r"'a' at step 2 is not an action \(one digit 0-3"),
         (_set("games", 0, "end", "tilt"), r"games\[0\]\.end must be one of"),
         (_set("games", 0, "frames", -1), r"games\[0\]\.frames must be >= 0"),
         (_set("games", []), r"holds no game"),
         (_set("options", "render_mode", "human"), r"options\.render_mode is set by the play"),
-        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0' games"),
+        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0' or 'Pinball-v1' games"),
         (_set("table_sha256", "abc"), r"table_sha256 must be 64"),
     ],
 )
@@ -385,3 +392,235 @@ def test_playing_without_a_display_says_so():
         play.main(["--table", "classic"])
     with pytest.raises(SystemExit):  # argparse: --headless is for --replay
         play.main(["--headless"])
+
+
+# --- the cabinet (Pinball-v1) ---------------------------------------------------------------
+
+
+def cabinet_action(keys: tuple[int, ...]) -> int:
+    """The discrete action of a set of keys: their buttons, the first nudge held winning."""
+    held = set(keys)
+    nudge = next((n + 1 for n, nudge_keys in enumerate(NUDGE_KEYS) if held & set(nudge_keys)), 0)
+    left, right = bool(held & set(LEFT_KEYS)), bool(held & set(RIGHT_KEYS))
+    return left + 2 * right + 4 * bool(held & set(PLUNGER_KEYS)) + 8 * nudge
+
+
+def test_keys_to_action_maps_the_cabinet_keys():
+    mapping = gym.make("Pinball-v1").unwrapped.get_keys_to_action()
+    keys = sorted(LEFT_KEYS + RIGHT_KEYS + CABINET_KEYS)
+    flipper_keys = set(LEFT_KEYS + RIGHT_KEYS)
+    # Every set of flipper keys, and every set of at most 4 keys with a cabinet key.
+    expected = {
+        c
+        for n in range(1, len(keys) + 1)
+        for c in itertools.combinations(keys, n)
+        if n <= 4 or set(c) <= flipper_keys
+    }
+    assert set(mapping) == expected and len(mapping) == 800
+    for combination, action in mapping.items():
+        assert action == cabinet_action(combination), combination
+    assert mapping[(pygame.K_DOWN,)] == mapping[(pygame.K_RETURN,)] == 4  # PLUNGER
+    assert mapping[(pygame.K_x,)] == 8 and mapping[(pygame.K_n,)] == 16  # NUDGE_LEFT, _RIGHT
+    assert mapping[(pygame.K_UP,)] == mapping[(pygame.K_b,)] == 24  # NUDGE_UP
+    both = tuple(sorted((pygame.K_z, pygame.K_m, pygame.K_DOWN, pygame.K_x)))
+    assert mapping[both] == 15  # BOTH_FLIPPERS_PLUNGER_NUDGE_LEFT
+    # Two nudges: the first of left, right, up.
+    assert mapping[tuple(sorted((pygame.K_n, pygame.K_b)))] == 16
+    assert mapping[tuple(sorted((pygame.K_x, pygame.K_n, pygame.K_UP)))] == 8
+
+
+def test_keys_to_action_of_the_cabinet_gives_button_arrays_for_multibinary():
+    env = gym.make("Pinball-v1", action_type="multibinary")
+    mapping = env.unwrapped.get_keys_to_action()
+    assert len(mapping) == 800
+    assert mapping[(pygame.K_RETURN,)].tolist() == [0, 0, 1, 0, 0, 0]
+    assert mapping[tuple(sorted((pygame.K_z, pygame.K_b)))].tolist() == [1, 0, 0, 0, 0, 1]
+    # Every nudge held is pressed (the env sums their directions: left and right cancel).
+    assert mapping[tuple(sorted((pygame.K_x, pygame.K_n)))].tolist() == [0, 0, 0, 1, 1, 0]
+    assert all(action in env.action_space for action in mapping.values())
+
+
+def test_gymnasium_play_works_on_the_cabinet():
+    with warnings.catch_warnings():  # it warns at import when matplotlib cannot use Tk
+        warnings.simplefilter("ignore")
+        from gymnasium.utils.play import play as gymnasium_play
+
+    actions: list[int] = []
+    quit_event = pygame.event.Event(pygame.QUIT)
+    events = {0: down(pygame.K_DOWN), 5: down(pygame.K_x), 10: up(pygame.K_DOWN)}
+
+    def callback(obs_t, obs_tp1, action, reward, terminated, truncated, info):
+        actions.append(int(action))
+        step = len(actions) - 1
+        if step in events or step >= 15:
+            pygame.event.post(events.get(step, quit_event))
+
+    gymnasium_play(gym.make("Pinball-v1", render_mode="rgb_array"), callback=callback, seed=0)
+    # The plunger, then the plunger and a nudge left, then the nudge alone.
+    assert actions == [0] + [4] * 5 + [12] * 5 + [8] * 5
+
+
+@pytest.fixture
+def cabinet_loop():
+    session = play.PlayLoop({"balls": 1}, seed=3, fps=0, env_id="Pinball-v1")
+    yield session
+    session.close()
+
+
+def test_the_plunger_keys_pull_the_plunger_and_fire_the_ball(cabinet_loop):
+    game = cabinet_loop.env.unwrapped.game
+    assert cabinet_loop.options == {"table": "classic_v1", "balls": 1}
+    cabinet_loop.run(scripted({0: [down(pygame.K_DOWN)]}), max_frames=30)
+    assert cabinet_loop.actions == [4] * 30
+    assert game.state.on_plunger[0] and game.state.plunger_pull[0] > 0.0
+    cabinet_loop.run(scripted({0: [up(pygame.K_DOWN)]}), max_frames=2)
+    assert not game.state.on_plunger[0] and game.world.state.active[0]
+    assert (
+        cabinet_loop.info["ball_position"][1] > cabinet_loop.env.unwrapped.table.plunger.position[1]
+    )
+
+
+def test_the_nudge_keys_and_the_first_nudge_wins(cabinet_loop):
+    script = {
+        0: [down(pygame.K_b)],
+        2: [down(pygame.K_n)],
+        4: [down(pygame.K_x)],
+        6: [up(pygame.K_x), up(pygame.K_n)],
+        8: [down(pygame.K_RETURN), down(pygame.K_z)],
+    }
+    cabinet_loop.run(scripted(script), max_frames=10)
+    assert cabinet_loop.actions == [24, 24, 16, 16, 8, 8, 24, 24, 29, 29]
+    assert cabinet_loop.info["cabinet_offset"][1] != 0.0  # nudged up the table
+
+
+@pytest.mark.parametrize("env_id", ["Pinball-v0", "Pinball-v1"])
+def test_the_play_loop_acts_as_the_key_map_and_on_any_number_of_keys(env_id):
+    session = play.PlayLoop({"balls": 1}, seed=3, fps=0, env_id=env_id)
+    try:
+        for keys, action in session.keys_to_action.items():
+            session.held = set(keys)
+            assert session.action == action, keys
+        session.held = set()
+        assert session.action == 0
+        if env_id == "Pinball-v1":  # more keys than the map holds: still their buttons
+            session.held = {pygame.K_LSHIFT, pygame.K_z, pygame.K_RSHIFT, pygame.K_DOWN, pygame.K_n}
+            assert session.action == 1 + 2 + 4 + 16
+            session.held = set(LEFT_KEYS + RIGHT_KEYS + CABINET_KEYS)
+            assert session.action == 1 + 2 + 4 + 8
+    finally:
+        session.close()
+
+
+def test_the_play_tool_plays_only_pinball_envs():
+    with pytest.raises(ValueError, match="plays Pinball-v0 or Pinball-v1, not 'CartPole-v1'"):
+        play.PlayLoop(env_id="CartPole-v1")
+
+
+@pytest.fixture(scope="module")
+def cabinet_recorded(tmp_path_factory) -> tuple[Path, tuple[play.GameRecord, ...]]:
+    """A recording of two Pinball-v1 games: a plunge, nudges and flips, a restart, then one that
+    the player quits."""
+    path = tmp_path_factory.mktemp("play") / "cabinet.json"
+    session = play.PlayLoop({"balls": 1}, seed=5, record=path, fps=0, env_id="Pinball-v1")
+    script = {
+        0: [down(pygame.K_DOWN)],
+        50: [up(pygame.K_DOWN)],
+        60: [down(pygame.K_x)],
+        62: [up(pygame.K_x)],
+        70: [down(pygame.K_RETURN), down(pygame.K_b)],
+        75: [up(pygame.K_RETURN), up(pygame.K_b)],
+        90: [down(pygame.K_z), down(pygame.K_m)],
+        120: [up(pygame.K_z), up(pygame.K_m)],
+        150: [down(pygame.K_r)],
+        151: [down(pygame.K_n)],
+    }
+    session.run(scripted(script), max_frames=180)
+    session.close()
+    return path, session.games
+
+
+def test_a_cabinet_recording_holds_the_actions_in_base_32(cabinet_recorded):
+    path, games = cabinet_recorded
+    data = json.loads(path.read_text())
+    assert data["version"] == 2 and data["env_id"] == "Pinball-v1"
+    assert data["options"] == {"table": "classic_v1", "balls": 1}
+    assert [(g["seed"], g["end"]) for g in data["games"]] == [(5, "restart"), (6, "quit")]
+    first = data["games"][0]["actions"]
+    # PLUNGER (4), NUDGE_LEFT (8), PLUNGER_NUDGE_UP (28: "s"), BOTH_FLIPPERS (3).
+    assert first[:50] == "4" * 50 and first[60:62] == "88" and first[70:75] == "s" * 5
+    assert first[90:120] == "3" * 30 and len(first) == 150
+    assert data["games"][1]["actions"] == "0" + "g" * 29  # NUDGE_RIGHT (16) held
+    assert play.decode_actions("0s3g") == [0, 28, 3, 16]
+    assert play.load_recording(path).games == games
+
+
+def test_a_cabinet_recording_replays(cabinet_recorded, capsys):
+    path, games = cabinet_recorded
+    recording = play.load_recording(path)
+    assert play.replay(recording) == [game.score for game in games]
+    assert play.replay(recording, window=True, fps=0) == [game.score for game in games]
+    assert play.main(["--replay", str(path), "--headless"]) == [game.score for game in games]
+    assert "as recorded" in capsys.readouterr().out
+    play.write_recording(path.with_name("copy.json"), recording)
+    assert path.with_name("copy.json").read_text() == path.read_text()
+
+
+def test_a_cabinet_recording_on_a_table_without_the_cabinet_is_refused(cabinet_recorded):
+    def to_classic(data: dict[str, Any]) -> None:
+        data["env_id"], data["options"]["table"] = "Pinball-v0", "classic"
+        data["table_sha256"] = play.table_sha256(load_table("classic"))
+
+    recording = play.parse_recording(edited(cabinet_recorded, to_classic))
+    with pytest.raises(play.RecordingError, match=r"'4' at step 0 is action 4, but the table "):
+        play.replay(recording)
+
+
+# Written by the play tool of commit 601e8ae, before the cabinet (one game, balls=2, seed 11:
+# left held 60 frames, both 60, right 60, then none until the game was over).
+RECORDING_BEFORE_THE_CABINET = {
+    "format": "pinball-env-recording",
+    "version": 1,
+    "package_version": pinball_env.__version__,
+    "env_id": "Pinball-v0",
+    "options": {"table": "classic", "balls": 2},
+    "max_episode_steps": 7200,
+    "table_sha256": "d241a4f7604a7adb10b96da539dfa50377cb221d0342f99e51d526fed9d7fb4a",
+    "games": [
+        {
+            "seed": 11,
+            "actions": "1" * 60 + "3" * 60 + "2" * 60 + "0" * 251,
+            "score": 530,
+            "frames": 431,
+            "end": "game over",
+        }
+    ],
+}
+
+
+def test_a_recording_from_before_the_cabinet_replays_and_writes_back_the_same(tmp_path):
+    text = json.dumps(RECORDING_BEFORE_THE_CABINET, indent=2) + "\n"  # as that tool wrote it
+    (tmp_path / "old.json").write_text(text)
+    recording = play.load_recording(tmp_path / "old.json")
+    assert recording.version == 1 and play.replay(recording) == [530]
+    play.write_recording(tmp_path / "again.json", recording)
+    assert (tmp_path / "again.json").read_text() == text
+
+
+def test_the_command_line_plays_pinball_v1(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(play, "has_display", lambda: True)  # SDL's dummy driver shows it
+    monkeypatch.setattr(play.PlayLoop, "run", lambda loop: play.PlayLoop.tick(loop))
+    scores = play.main(["--env", "Pinball-v1", "--seed", "2", "--record", str(tmp_path / "r.json")])
+    data = json.loads((tmp_path / "r.json").read_text())
+    assert scores == [0] and data["env_id"] == "Pinball-v1" and data["version"] == 2
+    assert data["options"] == {"table": "classic_v1"} and data["games"][0]["seed"] == 2
+    out = capsys.readouterr().out
+    assert "plunger: down / return" in out and "nudge up: up / b" in out
+    # Pinball-v0 by default, its keys as before.
+    play.main(["--seed", "2", "--record", str(tmp_path / "v0.json")])
+    data = json.loads((tmp_path / "v0.json").read_text())
+    assert data["env_id"] == "Pinball-v0" and data["options"] == {"table": "classic"}
+    assert data["version"] == 1 and "plunger" not in capsys.readouterr().out
+    with pytest.raises(SystemExit):  # argparse: the recording says which env
+        play.main(["--replay", str(tmp_path / "r.json"), "--env", "Pinball-v1"])
+    with pytest.raises(SystemExit):  # argparse: no such env
+        play.main(["--env", "Pinball-v2"])

@@ -69,7 +69,10 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     On the keyboard (``get_keys_to_action``, for ``gymnasium.utils.play.play`` and
     ``python -m pinball_env.tools.play``): left flipper Left Shift, Z or the left arrow; right
-    flipper Right Shift, M or the right arrow.
+    flipper Right Shift, M or the right arrow; with the cabinet, the plunger the down arrow or
+    Enter, nudges X (left), N (right), the up arrow or B (up). The map holds every set of
+    flipper keys and every set of at most ``MAX_CABINET_KEYS`` (4) keys with a cabinet key; in a
+    discrete action the first of the nudges held (left, right, up) wins.
 
     ## Observation Space
 
@@ -154,9 +157,10 @@ class PinballEnv(CoreAttributes, gym.Env):
     **The cabinet's rules** (``Pinball-v1``). A ball that falls back down the shooter lane
     waits on the plunger again; a ball that has stayed in the shooter lane for 10 s
     (BALL_SEARCH_TIME: waiting, or plunged too softly and fallen back) is fired by the machine
-    at a speed drawn from the plunger's range, so every game still ends. The skill shot: the rollover ``skill_lane`` (under the top arch, on the right) is
-    lit for 1.25 s after the player's plunge and scores 1000 points if crossed while lit: a
-    pull of 56-58 frames (of the 60 of the whole stroke) makes it. The tilt: a plumb bob (a
+    at a speed drawn from the plunger's range, so every game still ends. The skill shot: the
+    rollover ``skill_lane`` (under the top arch, on the right) is lit for 1.25 s after the
+    player's plunge and scores 1000 points if crossed while lit: a pull of 56-58 frames (of the
+    60 of the whole stroke) makes it. The tilt: a plumb bob (a
     0.1 m pendulum) swings with the cabinet; each time it touches its ring (5 degrees from
     vertical) is a warning, forgotten after 10 s without another; the touch after 2 warnings
     tilts the machine: the flippers and kickers go dead, nothing scores, the ball is lost
@@ -238,7 +242,10 @@ class PinballEnv(CoreAttributes, gym.Env):
       ``frame_skip`` steps per second, needs the ``render`` extra; ``metadata["render_fps"]`` is
       that rate rounded to an int, at least 1) or ``"rgb_array"`` (an aspect-correct uint8
       HxWx3 frame, no display needed). A frame shows the playfield (the ball where it drained
-      once the game is over) and beside it a scoreboard with the score and the balls left.
+      once the game is over) and beside it a scoreboard with the score and the balls left;
+      with the cabinet also the plunger pulled back (drawn at a smaller scale where the table
+      has no room below it), the cabinet's shake (twice its offset) and, on the scoreboard,
+      the tilt warnings and TILT.
 
     ## Version History
 
@@ -359,7 +366,7 @@ class PinballEnv(CoreAttributes, gym.Env):
             for name in names_of_button
         ]
         flippers = len(BUTTONS)  # buttons before these are the flippers'
-        nudges = flippers + 1  # the plunger, then the nudges
+        nudges = [i for i, name in enumerate(names) if name.startswith("nudge")]
         # play looks up exactly the set of keys held, so every combination needs an entry.
         mapping: dict[tuple[int, ...], int | np.ndarray] = {}
         for count in range(1, len(keys) + 1):
@@ -371,8 +378,8 @@ class PinballEnv(CoreAttributes, gym.Env):
                 pressed[buttons] = True
                 codes = tuple(sorted(code for code, _ in combination))
                 if self.action_type == "discrete":
-                    held = np.flatnonzero(pressed[nudges:])
-                    pressed[nudges + held[1:]] = False  # the first nudge wins
+                    held = [i for i in nudges if pressed[i]]
+                    pressed[held[1:]] = False  # the first nudge wins
                     mapping[codes] = discrete_action(pressed)
                 else:
                     mapping[codes] = pressed.astype(np.int8)

@@ -4,7 +4,8 @@
 - ``painters.py``: the compiled painters (numba): lines, discs, flippers, a batch of frames;
 - ``raster.py``: :class:`Renderer` (one table, one or N envs' frames) and :class:`FrameRenderer`
   (frames of one fixed size whatever the table), :func:`render_size`, :func:`fit_size`;
-- ``scoreboard.py``: the score and balls left beside rendered frames;
+- ``scoreboard.py``: the score and balls left beside rendered frames (and the cabinet's tilt
+  warnings and TILT);
 - ``window.py``: :class:`Window`, a thin pygame window for ``render_mode="human"``.
 
 No module imports pygame until a :class:`Window` opens.
@@ -18,7 +19,9 @@ from pinball_env.render.colours import (
     KICKER,
     LUMA_WEIGHTS,
     ONE_SIDED,
+    PLUNGER,
     POST,
+    SCOREBOARD_ALERT,
     SCOREBOARD_TEXT,
     SENSOR,
     WALL,
@@ -28,7 +31,9 @@ from pinball_env.render.colours import (
 from pinball_env.render.painters import MIN_LINE_HALF_WIDTH, OUTLINE_BAND
 from pinball_env.render.raster import (
     PIXELS_PER_METRE,
+    PLUNGER_TIP_FLOOR,
     SENSOR_HALF_WIDTH,
+    SHAKE_EXAGGERATION,
     WALL_HALF_WIDTH,
     FrameRenderer,
     Renderer,
@@ -49,11 +54,15 @@ __all__ = [
     "ONE_SIDED",
     "OUTLINE_BAND",
     "PIXELS_PER_METRE",
+    "PLUNGER",
+    "PLUNGER_TIP_FLOOR",
     "POST",
+    "SCOREBOARD_ALERT",
     "SCOREBOARD_TEXT",
     "SCOREBOARD_WIDTH",
     "SENSOR",
     "SENSOR_HALF_WIDTH",
+    "SHAKE_EXAGGERATION",
     "WALL",
     "WALL_HALF_WIDTH",
     "Colour",

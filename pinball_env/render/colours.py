@@ -17,7 +17,9 @@ SENSOR = (62, 72, 92)
 DRAIN = (92, 52, 62)
 FLIPPER = (250, 195, 60)
 BALL = (248, 248, 252)
+PLUNGER = (190, 195, 210)  # the player's plunger: steel, darker than the ball in grayscale
 SCOREBOARD_TEXT = (250, 195, 60)
+SCOREBOARD_ALERT = (235, 60, 50)  # the scoreboard's tilt warnings and TILT
 
 # ITU-R BT.601 luma weights (as PIL's "L" mode and OpenCV use), in thousandths so that the
 # grayscale image is computed in exact integer arithmetic.

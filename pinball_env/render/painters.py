@@ -1,5 +1,6 @@
 """The compiled painters (numba; no display, no pygame): lines, discs and flippers rasterised
-into uint8 images, through the kernel's own ``segment_offset`` and ``flipper_distance``.
+into uint8 images, through the kernel's own ``segment_offset`` and ``flipper_distance``; the
+player's plunger, and the static layer moved by whole pixels for the cabinet's shake.
 
 Image row 0 is the top of the table (y = ``table_height``) and x grows to the right; the centre of
 pixel (row i, column j) is the world point ((j + 0.5) / sx, table_height - (i + 0.5) / sy), with
@@ -100,29 +101,74 @@ def paint_flipper(image, px, py, length, rb, rt, angle, colour, sx, sy, table_he
 
 
 @njit(cache=True)
+def _copy_shifted(image, static, rows, cols, background):
+    """``image`` = ``static`` moved down ``rows`` and right ``cols`` pixels, the uncovered band
+    ``background`` (a cabinet's shake moves the whole playfield)."""
+    if rows == 0 and cols == 0:
+        image[...] = static
+        return
+    height, width = static.shape[0], static.shape[1]
+    image[...] = background
+    r0, r1 = max(0, rows), min(height, height + rows)
+    c0, c1 = max(0, cols), min(width, width + cols)
+    if r0 < r1 and c0 < c1:
+        image[r0:r1, c0:c1] = static[r0 - rows : r1 - rows, c0 - cols : c1 - cols]
+
+
+@njit(cache=True)
+def paint_plunger(image, x, tip, plunger, colour, sx, sy, table_height):
+    """The player's plunger at ``x`` [m], its tip (a bar across the shooter lane) with its top
+    edge at height ``tip`` [m]; ``plunger`` holds (x at rest [m], the rod's half-width [px], the
+    tip's half-length [m], its half-width [px]). The rod runs down from the tip out of the
+    bottom of the picture, as a real one leaves the cabinet through its front."""
+    rod, reach, bar = plunger[1], plunger[2], plunger[3]
+    # The bar's top edge at the tip, where the ball sits, raised by the ball's 0.5 px outline
+    # band so that the two touch on screen.
+    bar_y = tip - (bar - OUTLINE_BAND) / sy
+    # The rod's round end kept under the bar's top edge.
+    rod_top = bar_y - max(0.0, rod - bar) / sy
+    paint_line(image, x, rod_top, x, -2.0 / sy, rod, colour, sx, sy, table_height)
+    paint_line(image, x - reach, bar_y, x + reach, bar_y, bar, colour, sx, sy, table_height)
+
+
+@njit(cache=True)
 def _draw_env(images, env, static, balls, visible, angles, flippers, radius, flipper_colour,
-              ball_colour, sx, sy, table_height):  # fmt: skip
-    """One env's frame: the static layer, its flippers, and its ball where visible."""
-    images[env] = static
+              ball_colour, sx, sy, table_height, shifts, tips, plunger, plunger_colour,
+              background):  # fmt: skip
+    """One env's frame: the static layer (shifted by ``shifts[env]`` (rows, columns)), its
+    flippers, its plunger (where ``tips[env]`` is finite) and its ball where visible, the
+    moving parts moved with the static layer."""
+    rows, cols = shifts[env, 0], shifts[env, 1]
+    _copy_shifted(images[env], static, rows, cols, background)
+    # The pixel shift in world units (0.0 without a shake: every coordinate as it was).
+    dx, dy = cols / sx, -rows / sy
     for j in range(flippers.shape[0]):
         f = flippers[j]
         paint_flipper(
-            images[env], f[0], f[1], f[2], f[3], f[4], angles[env, j], flipper_colour, sx, sy,
+            images[env], f[0] + dx, f[1] + dy, f[2], f[3], f[4], angles[env, j], flipper_colour,
+            sx, sy, table_height,
+        )  # fmt: skip
+    if math.isfinite(tips[env]):
+        paint_plunger(
+            images[env], plunger[0] + dx, tips[env] + dy, plunger, plunger_colour, sx, sy,
             table_height,
         )  # fmt: skip
     if visible[env]:
         paint_disc(
-            images[env], balls[env, 0], balls[env, 1], radius, ball_colour, sx, sy, table_height
-        )
+            images[env], balls[env, 0] + dx, balls[env, 1] + dy, radius, ball_colour, sx, sy,
+            table_height,
+        )  # fmt: skip
 
 
 @njit(cache=True, nogil=True)
 def draw_moving_parts(images, static, balls, visible, angles, flippers, radius, flipper_colour,
-                       ball_colour, sx, sy, table_height, start, stop):  # fmt: skip
+                       ball_colour, sx, sy, table_height, shifts, tips, plunger, plunger_colour,
+                       background, start, stop):  # fmt: skip
     """The frames of envs ``start`` to ``stop`` (see :func:`_draw_env`). The GIL is released,
     so threads can draw disjoint ranges at once."""
     for env in range(start, stop):
         _draw_env(
             images, env, static, balls, visible, angles, flippers, radius, flipper_colour,
-            ball_colour, sx, sy, table_height,
+            ball_colour, sx, sy, table_height, shifts, tips, plunger, plunger_colour,
+            background,
         )  # fmt: skip

@@ -2,7 +2,9 @@
 
 :class:`Renderer` rasterises with the compiled painters (``painters.py``): the static layer
 (playfield, sensors, walls, posts) once, then per frame a copy of it with the flippers and the
-ball painted over their pixel bounding boxes, for one env or a batch of envs in one call.
+ball painted over their pixel bounding boxes, for one env or a batch of envs in one call. On a
+table with the cabinet, a frame can also show the player's plunger (pulled back, the ball
+waiting on it drawn with it) and the cabinet's shake (the whole playfield moved by its offset).
 :class:`FrameRenderer` draws any table into frames of one fixed size (fitted, letterboxed), so
 that an env whose tables differ renders frames of one size.
 
@@ -22,6 +24,7 @@ from pinball_env.render.colours import (
     FLIPPER,
     KICKER,
     ONE_SIDED,
+    PLUNGER,
     POST,
     SENSOR,
     WALL,
@@ -38,8 +41,25 @@ SENSOR_HALF_WIDTH = 0.001  # [m]
 # Scale of rendered frames (render()), as opposed to observations, which have a size in pixels.
 PIXELS_PER_METRE = 600.0
 
+# The player's plunger (tables with a cabinet): a rod under the ball, a bar across the lane at its
+# tip. A real shooter lane runs on under the plunger; here the ball waits 4 cm above the table's
+# bottom edge while the stroke is 5 cm, so a true-scale pull would draw the ball out of the picture
+# (its centre 1 cm below it): the pull is drawn scaled (Renderer.pull_scale) so that the whole
+# stroke brings the tip down to PLUNGER_TIP_FLOOR above the bottom edge, never lower.
+PLUNGER_ROD_HALF_WIDTH = 0.003  # [m]
+PLUNGER_TIP_HALF_WIDTH = 0.002  # [m]: the bar's thickness, half
+PLUNGER_TIP_REACH = 0.8  # the bar's half-length, in ball radii
+PLUNGER_TIP_FLOOR = 0.012  # [m]: the tip's bar clear of a bottom wall at 5 mm
+# render() frames draw the cabinet's shake at twice its size: a nudge moves the cabinet about 5 mm
+# (3 px at PIXELS_PER_METRE) for a few frames, a jolt hard to see; 6 px reads as one. Every part
+# moves together, so the picture is true within the table; observations should pass the offset
+# at 1x (an 84x84 image barely moves at either).
+SHAKE_EXAGGERATION = 2.0
+
 _FLIPPER_LUMA = luminance(FLIPPER)
 _BALL_LUMA = luminance(BALL)
+_PLUNGER_LUMA = luminance(PLUNGER)
+_BACKGROUND_LUMA = luminance(BACKGROUND)
 
 
 def render_size(table: Table, pixels_per_metre: float = PIXELS_PER_METRE) -> tuple[int, int]:
@@ -72,6 +92,12 @@ class Renderer:
     the aspect differs). The static layer (playfield, walls, posts, sensors) is rasterised once in
     __init__; each frame copies it and draws the flippers and the ball, for one env
     (:meth:`frame`, :meth:`grayscale`) or a batch of envs in one compiled call (:meth:`frames`).
+
+    The cabinet (optional arguments, for a table with one): ``plunger_pull`` draws the player's
+    plunger pulled back by it (scaled by :attr:`pull_scale`), ``on_plunger`` the ball waiting on
+    it, drawn pulled back with it, and ``cabinet_offset`` [m] moves the whole playfield by the
+    cabinet's offset (rounded to whole pixels; the band it uncovers is the background). Without
+    them a frame is drawn exactly as on a table without a cabinet.
     """
 
     def __init__(self, table: Table, width: int, height: int) -> None:
@@ -89,11 +115,28 @@ class Renderer:
             [(*f.pivot, f.length, f.base_radius, f.tip_radius) for f in table.flippers],
             dtype=np.float64,
         ).reshape(-1, 5)
+        self._plunger, self.pull_scale = self._plunger_layout()
         self._static_rgb = self._static_layer()
         # Every colour is painted solid, so the grayscale image is the same drawing in luma:
         # keeping a gray static layer saves converting whole frames.
         self._static_gray = luminance(self._static_rgb)
         self._static_gray.flags.writeable = False
+
+    def _plunger_layout(self) -> tuple[np.ndarray | None, float]:
+        """The player's plunger for the painters (x at rest [m], rod half-width [px], tip
+        half-length [m], tip half-width [px]) and the scale of its drawn pull; (None, 1.0) for a
+        table whose plunger the machine fires."""
+        plunger = self.table.plunger
+        if plunger is None or not plunger.manual:
+            return None, 1.0
+        scale = math.sqrt(self._view[0] * self._view[1])  # as the walls' widths
+        radius = self.table.ball.radius
+        layout = np.array([
+            plunger.position[0], PLUNGER_ROD_HALF_WIDTH * scale, PLUNGER_TIP_REACH * radius,
+            PLUNGER_TIP_HALF_WIDTH * scale,
+        ])  # fmt: skip
+        room = plunger.position[1] - radius - PLUNGER_TIP_FLOOR
+        return layout, min(1.0, max(0.0, room) / plunger.stroke)
 
     def _static_layer(self) -> np.ndarray:
         """The playfield, sensors, walls and posts, read-only (frames copy it)."""
@@ -116,18 +159,35 @@ class Renderer:
         return image
 
     def frame(
-        self, ball_position: tuple[float, float] | None, flipper_angles: Sequence[float]
+        self,
+        ball_position: tuple[float, float] | None,
+        flipper_angles: Sequence[float],
+        *,
+        plunger_pull: float | None = None,
+        on_plunger: bool = False,
+        cabinet_offset: tuple[float, float] | None = None,
     ) -> np.ndarray:
         """The table with the flippers at ``flipper_angles`` [rad] (one per ``table.flippers``
         entry, in order) and the ball at ``ball_position`` [m] (None: out of play, not drawn),
-        as a new (height, width, 3) uint8 array."""
-        return self._one(ball_position, flipper_angles, grayscale=False)
+        as a new (height, width, 3) uint8 array. The cabinet's arguments are :meth:`frames`'s,
+        for the one env."""
+        return self._one(
+            ball_position, flipper_angles, False, plunger_pull, on_plunger, cabinet_offset
+        )
 
     def grayscale(
-        self, ball_position: tuple[float, float] | None, flipper_angles: Sequence[float]
+        self,
+        ball_position: tuple[float, float] | None,
+        flipper_angles: Sequence[float],
+        *,
+        plunger_pull: float | None = None,
+        on_plunger: bool = False,
+        cabinet_offset: tuple[float, float] | None = None,
     ) -> np.ndarray:
         """:meth:`frame` as (height, width, 1) uint8 luma (:data:`LUMA_WEIGHTS`)."""
-        return self._one(ball_position, flipper_angles, grayscale=True)
+        return self._one(
+            ball_position, flipper_angles, True, plunger_pull, on_plunger, cabinet_offset
+        )
 
     def frames(
         self,
@@ -137,12 +197,22 @@ class Renderer:
         grayscale: bool = False,
         out: np.ndarray | None = None,
         threads: EnvThreads | None = None,
+        *,
+        plunger_pull: np.ndarray | None = None,
+        on_plunger: np.ndarray | None = None,
+        cabinet_offset: np.ndarray | None = None,
     ) -> np.ndarray:
         """Frames of a batch of envs: ball centres ``balls`` (N, >= 2) [m], drawn where
         ``visible`` (N,) bool, flippers at ``flipper_angles`` (N, F) [rad]. Returns (N, height,
         width, 3) uint8, or (N, height, width, 1) luma with ``grayscale``, the table's picture at
         (:attr:`top`, :attr:`left`), written into ``out`` when given; ``threads`` share the
-        envs."""
+        envs.
+
+        The cabinet (a table with the player's plunger; ``game.state`` and the kernel's state
+        hold them): ``plunger_pull`` (N,) [m] draws the plunger pulled back by it, ``on_plunger``
+        (N,) bool lowers those balls with it (they wait on it, at ``table.plunger.position``),
+        ``cabinet_offset`` (N, 2) [m] (x, y) moves the whole playfield (the ``CABINET_X``,
+        ``CABINET_Y`` columns, times an exaggeration if wanted, see SHAKE_EXAGGERATION)."""
         flipper_angles = np.asarray(flipper_angles, dtype=np.float64)
         if flipper_angles.ndim != 2 or flipper_angles.shape[1] != len(self._flippers):
             raise ValueError(
@@ -150,15 +220,28 @@ class Renderer:
             )
         static = self._static_gray if grayscale else self._static_rgb
         n, (rows, columns, channels) = flipper_angles.shape[0], static.shape
+        balls = np.ascontiguousarray(balls, dtype=np.float64)
+        shifts = self._shifts(n, cabinet_offset)
+        tips, drawn_pull = self._plunger_tips(n, plunger_pull)
+        if on_plunger is not None:
+            if drawn_pull is None:
+                raise ValueError("on_plunger needs plunger_pull: the ball waits on the plunger")
+            waiting = np.asarray(on_plunger, dtype=np.bool_).reshape(n)
+            balls = balls.copy()
+            balls[waiting, 1] -= drawn_pull[waiting]
         if out is None:
             out = np.empty((n, self.height, self.width, channels), dtype=np.uint8)
         fills = (rows, columns) == (self.height, self.width)
         pictures = out if fills else np.empty((n, *static.shape), dtype=np.uint8)
-        colours = (_FLIPPER_LUMA, _BALL_LUMA) if grayscale else (rgb(FLIPPER), rgb(BALL))
+        if grayscale:
+            colours = (_FLIPPER_LUMA, _BALL_LUMA, _PLUNGER_LUMA, _BACKGROUND_LUMA)
+        else:
+            colours = (rgb(FLIPPER), rgb(BALL), rgb(PLUNGER), rgb(BACKGROUND))
+        plunger = np.zeros(4) if self._plunger is None else self._plunger
         args = (
-            pictures, static, np.ascontiguousarray(balls, dtype=np.float64),
-            np.ascontiguousarray(visible, dtype=np.bool_), flipper_angles, self._flippers,
-            self.table.ball.radius, *colours, *self._view,
+            pictures, static, balls, np.ascontiguousarray(visible, dtype=np.bool_),
+            flipper_angles, self._flippers, self.table.ball.radius, colours[0], colours[1],
+            *self._view, shifts, tips, plunger, colours[2], colours[3],
         )  # fmt: skip
         if threads is None:
             draw_moving_parts(*args, 0, n)
@@ -169,11 +252,45 @@ class Renderer:
             out[:, self.top : self.top + rows, self.left : self.left + columns] = pictures
         return out
 
+    def _shifts(self, n: int, cabinet_offset: np.ndarray | None) -> np.ndarray:
+        """(n, 2) int64 (rows down, columns right): the cabinet's offsets in whole pixels."""
+        shifts = np.zeros((n, 2), dtype=np.int64)
+        if cabinet_offset is None:
+            return shifts
+        offset = np.asarray(cabinet_offset, dtype=np.float64)
+        if offset.shape != (n, 2):
+            raise ValueError(f"expected ({n}, 2) cabinet offsets, got {offset.shape}")
+        offset = np.where(np.isfinite(offset), offset, 0.0)
+        sx, sy, _ = self._view
+        # Clipped to the picture's size: a shift past it leaves only the background anyway.
+        shifts[:, 0] = np.clip(np.rint(-offset[:, 1] * sy), -self.height, self.height)
+        shifts[:, 1] = np.clip(np.rint(offset[:, 0] * sx), -self.width, self.width)
+        return shifts
+
+    def _plunger_tips(
+        self, n: int, plunger_pull: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """(n,) height [m] of the plunger's tip (NaN: no plunger drawn), and the drawn pull
+        (None without ``plunger_pull``)."""
+        if plunger_pull is None:
+            return np.full(n, np.nan), None
+        if self._plunger is None:
+            raise ValueError(
+                f"table {self.table.name!r} has no player's plunger to draw pulled back"
+            )
+        pull = np.asarray(plunger_pull, dtype=np.float64).reshape(n)
+        plunger = self.table.plunger
+        drawn = np.clip(np.nan_to_num(pull), 0.0, plunger.stroke) * self.pull_scale
+        return plunger.position[1] - self.table.ball.radius - drawn, drawn
+
     def _one(
         self,
         ball_position: tuple[float, float] | None,
         flipper_angles: Sequence[float],
         grayscale: bool,
+        plunger_pull: float | None = None,
+        on_plunger: bool = False,
+        cabinet_offset: tuple[float, float] | None = None,
     ) -> np.ndarray:
         if len(flipper_angles) != len(self._flippers):
             raise ValueError(
@@ -182,7 +299,13 @@ class Renderer:
         visible = ball_position is not None
         ball = np.array([ball_position if visible else (0.0, 0.0)], dtype=np.float64)
         angles = np.array([flipper_angles], dtype=np.float64).reshape(1, -1)
-        return self.frames(ball, np.array([visible]), angles, grayscale)[0]
+        pull = None if plunger_pull is None else np.array([plunger_pull], dtype=np.float64)
+        waiting = None if pull is None and not on_plunger else np.array([on_plunger])
+        offset = None if cabinet_offset is None else np.array([cabinet_offset], dtype=np.float64)
+        return self.frames(
+            ball, np.array([visible]), angles, grayscale, plunger_pull=pull,
+            on_plunger=waiting, cabinet_offset=offset,
+        )[0]  # fmt: skip
 
 
 class FrameRenderer(Renderer):

@@ -1,29 +1,38 @@
-"""Play ``Pinball-v0`` on the keyboard: ``python -m pinball_env.tools.play``.
+"""Play ``Pinball-v0`` or ``Pinball-v1`` on the keyboard: ``python -m pinball_env.tools.play``.
 
-``python -m pinball_env.tools.play [--table NAME] [--seed S] [--record FILE]`` opens a pygame
-window (the ``render`` extra) and plays at real speed, one env step per frame (the table's
-frame rate, 60 frames per second), with the score and the balls left on the scoreboard.
-``--replay FILE [--headless]`` plays a recording back and checks that every game scores what
-was recorded.
+``python -m pinball_env.tools.play [--env ID] [--table NAME] [--seed S] [--record FILE]`` opens
+a pygame window (the ``render`` extra) and plays at real speed, one env step per frame (the
+table's frame rate, 60 frames per second), with the score and the balls left on the scoreboard.
+``--env Pinball-v1`` plays the whole cabinet (its table ``classic_v1``): the player's plunger,
+the nudge and the tilt, whose warnings and TILT the scoreboard shows. ``--table`` plays another
+table on the env (default: the env's own). ``--replay FILE [--headless]`` plays a recording back
+and checks that every game scores what was recorded.
 
-Keys (the flipper keys are ``PinballEnv.FLIPPER_KEYS``, the map of ``get_keys_to_action``):
+Keys (``PinballEnv.FLIPPER_KEYS`` and ``CABINET_KEYS``, the map of ``get_keys_to_action``; the
+cabinet's on a table that has one):
 
 ============================  ===========================================
 Left Shift, Z, Left arrow     left flipper (held: up)
 Right Shift, M, Right arrow   right flipper
+Down arrow, Enter             plunger (held: pulled back; let go: fires)
+X / N                         nudge left / right
+Up arrow, B                   nudge up
 P or Space                    pause / resume
 R                             restart: a new game, with the next seed
 Esc or Q, closing the window  quit
 ============================  ===========================================
+
+Any number of keys can be held at once; with several nudge keys held, the first of left, right,
+up nudges (a discrete action holds one nudge).
 
 Recordings (``--record FILE``) are JSON, one file per session holding every game played in it,
 in order: a game ends at game over, at the time limit, at a restart (R) or when the window is
 closed, and the file is rewritten as each game ends (a game with no step is not kept)::
 
     {
-      "format": "pinball-env-recording",  "version": 1,
+      "format": "pinball-env-recording",  "version": 1,   // 2 with the cabinet (below)
       "package_version": "0.1.0",          // pinball_env.__version__
-      "env_id": "Pinball-v0",
+      "env_id": "Pinball-v0",              // or "Pinball-v1"
       "options": {"table": "classic"},     // every gym.make option passed
       "max_episode_steps": 7200,           // the TimeLimit of the env played
       "table_sha256": "...",               // the table played (a table file may change)
@@ -33,11 +42,14 @@ closed, and the file is rewritten as each game ends (a game with no step is not 
       ]
     }
 
-``actions`` holds one digit per step, the ``Discrete(4)`` action (0 none, 1 left, 2 right,
-3 both). :func:`load_recording` refuses, naming the problem, a file that is not such a
-recording (bad JSON, a missing or unknown key, a wrong type, an action outside 0-3), one of
-another format version or package version, and :func:`replay` one whose table is not the
-recorded one; a replay that does not end as recorded (the same score, frames and end) raises
+``actions`` holds one character per step, the discrete action. Format version 1 (a table without
+a cabinet, written as before the cabinet): a digit 0-3 (0 none, 1 left, 2 right, 3 both).
+Version 2 (a table with the cabinet, 32 actions): the action in base 32, ``0``-``9`` then
+``a``-``v`` (10-31); the first four are version 1's. :func:`load_recording` refuses, naming the
+problem, a file that is not such a recording (bad JSON, a missing or unknown key, a wrong type,
+an action that is not a character of its version), one of another format version or package
+version, and :func:`replay` one whose table is not the recorded one or has fewer actions; a
+replay that does not end as recorded (the same score, frames and end) raises
 :class:`RecordingError`, so a recording is never taken for a different game.
 """
 
@@ -57,15 +69,22 @@ import numpy as np
 
 from pinball_env import __version__  # importing the package registers Pinball-v0
 from pinball_env.env import PinballEnv
+from pinball_env.game import discrete_action
 from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Window
 from pinball_env.table import Table, table_to_dict
 from pinball_env.tools.demo import has_display
 
-ENV_ID = "Pinball-v0"
+ENV_ID = "Pinball-v0"  # the env played by default
+ENV_IDS = ("Pinball-v0", "Pinball-v1")  # the envs the tool plays and records
 FORMAT = "pinball-env-recording"
-FORMAT_VERSION = 1
+# Format versions, by their actions: 1, digits 0-3 (a table without a cabinet); 2, base-32
+# characters 0-9a-v (the cabinet's 32 actions). A recording is written in the first that holds
+# its env's actions, so that Pinball-v0's stay as before.
+FORMAT_VERSIONS = (1, 2)
+FORMAT_VERSION = FORMAT_VERSIONS[-1]  # the newest
+ACTION_CHARACTERS = {1: "0123", 2: "0123456789abcdefghijklmnopqrstuv"}
 ENDS = ("game over", "time limit", "restart", "quit")
-# Options a recording cannot carry: it renders itself, and its actions are Discrete(4) digits.
+# Options a recording cannot carry: it renders itself, and its actions are discrete.
 FIXED_OPTIONS = ("render_mode", "action_type")
 
 BANNER_PAUSED = "PAUSED\nP: play on"
@@ -84,7 +103,8 @@ class ReplayStopped(Exception):
 
 @dataclasses.dataclass(frozen=True)
 class GameRecord:
-    """One game of a recording: its seed, one action digit per step, and how it ended."""
+    """One game of a recording: its seed, one action character per step (see the module
+    doc), and how it ended."""
 
     seed: int
     actions: str
@@ -103,11 +123,12 @@ class Recording:
     table_sha256: str
     games: tuple[GameRecord, ...] = ()
     package_version: str = __version__
+    version: int = 1  # the format version (FORMAT_VERSIONS)
 
     def to_json(self) -> dict[str, Any]:
         return {
             "format": FORMAT,
-            "version": FORMAT_VERSION,
+            "version": self.version,
             "package_version": self.package_version,
             "env_id": self.env_id,
             "options": self.options,
@@ -124,6 +145,30 @@ def table_sha256(table: Table) -> str:
     """A digest of everything a table file describes (its canonical JSON)."""
     text = json.dumps(table_to_dict(table), sort_keys=True)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def encode_action(action: int, version: int) -> str:
+    """The character of a discrete action in a recording of format ``version``."""
+    return ACTION_CHARACTERS[version][action]
+
+
+def decode_actions(actions: str) -> list[int]:
+    """The discrete actions of a recording's ``actions`` string (any format version)."""
+    return [int(character, 32) for character in actions]
+
+
+def format_version(n_actions: int) -> int:
+    """The format version that a recording of an env with ``n_actions`` actions is written in:
+    the first whose characters hold them all."""
+    for version in FORMAT_VERSIONS:
+        if n_actions <= len(ACTION_CHARACTERS[version]):
+            return version
+    raise ValueError(f"no recording format holds {n_actions} actions")
+
+
+def default_table(env_id: str) -> str:
+    """The table ``env_id`` plays unless told another (``classic``, ``classic_v1``)."""
+    return str(gym.spec(env_id).kwargs.get("table", "classic"))
 
 
 def make_env(
@@ -167,10 +212,11 @@ def parse_recording(data: Any, source: str = "recording") -> Recording:
         raise fail(f"expected a JSON object, got {type(data).__name__}")
     if data.get("format") != FORMAT:
         raise fail(f"not a pinball recording (format {data.get('format')!r}, expected {FORMAT!r})")
-    if data.get("version") != FORMAT_VERSION:
+    version = data.get("version")
+    if isinstance(version, bool) or version not in FORMAT_VERSIONS:
+        readable = " and ".join(map(str, FORMAT_VERSIONS))
         raise fail(
-            f"recording format version {data.get('version')!r}; this pinball-env reads version "
-            f"{FORMAT_VERSION}"
+            f"recording format version {version!r}; this pinball-env reads versions {readable}"
         )
     top = _fields(data, {
         "format": str, "version": int, "package_version": str, "env_id": str, "options": dict,
@@ -181,8 +227,9 @@ def parse_recording(data: Any, source: str = "recording") -> Recording:
             f"recorded with pinball-env {top['package_version']}, this is {__version__}: a game "
             "can differ between versions, so it is not replayed"
         )
-    if top["env_id"] != ENV_ID:
-        raise fail(f"env_id {top['env_id']!r}: only {ENV_ID!r} games are recorded")
+    if top["env_id"] not in ENV_IDS:
+        known = " or ".join(map(repr, ENV_IDS))
+        raise fail(f"env_id {top['env_id']!r}: only {known} games are recorded")
     options = top["options"]
     for key in FIXED_OPTIONS:
         if key in options:
@@ -199,13 +246,19 @@ def parse_recording(data: Any, source: str = "recording") -> Recording:
         options=options,
         max_episode_steps=steps,
         table_sha256=top["table_sha256"],
-        games=tuple(_parse_game(raw, index, fail) for index, raw in enumerate(top["games"])),
+        games=tuple(
+            _parse_game(raw, index, version, fail) for index, raw in enumerate(top["games"])
+        ),
         package_version=top["package_version"],
+        version=version,
     )
 
 
-def _parse_game(raw: Any, index: int, fail: Callable[[str], RecordingError]) -> GameRecord:
-    """The :class:`GameRecord` of ``games[index]`` of a recording, after checking it."""
+def _parse_game(
+    raw: Any, index: int, version: int, fail: Callable[[str], RecordingError]
+) -> GameRecord:
+    """The :class:`GameRecord` of ``games[index]`` of a recording of format ``version``, after
+    checking it."""
     where = f"games[{index}]."
     if not isinstance(raw, dict):
         raise fail(f"games[{index}] must be an object, got {type(raw).__name__}")
@@ -215,11 +268,13 @@ def _parse_game(raw: Any, index: int, fail: Callable[[str], RecordingError]) -> 
     for key in ("seed", "score", "frames"):
         if game[key] < 0:
             raise fail(f"{where}{key} must be >= 0, got {game[key]}")
-    bad = re.search(r"[^0-3]", game["actions"])
+    characters = ACTION_CHARACTERS[version]
+    bad = re.search(f"[^{re.escape(characters)}]", game["actions"])
     if bad is not None:
+        kind = "digit 0-3" if version == 1 else "character 0-9 or a-v"
         raise fail(
             f"{where}actions: {bad.group()!r} at step {bad.start()} is not an action "
-            "(one digit 0-3 per step)"
+            f"(one {kind} per step, format version {version})"
         )
     if not game["actions"]:
         raise fail(f"{where}actions is empty")
@@ -264,11 +319,21 @@ def replay(
     except (TypeError, ValueError, OSError) as error:
         raise RecordingError(f"the recording's options do not make a game: {error}") from None
     try:
+        table = recording.options.get("table", default_table(recording.env_id))
         if table_sha256(env.unwrapped.table) != recording.table_sha256:
             raise RecordingError(
-                f"the table {recording.options.get('table', 'classic')!r} is not the recorded one "
-                "(its file has changed since): not replayed"
+                f"the table {table!r} is not the recorded one (its file has changed since): not "
+                "replayed"
             )
+        n_actions = env.action_space.n
+        for index, game in enumerate(recording.games):
+            for step, action in enumerate(decode_actions(game.actions)):
+                if action >= n_actions:
+                    raise RecordingError(
+                        f"games[{index}].actions: {game.actions[step]!r} at step {step} is "
+                        f"action {action}, but the table {table!r} has {n_actions} actions: not "
+                        "replayed"
+                    )
         screen = _Screen(env, fps, "Pinball replay") if window else None
         try:
             return [
@@ -286,9 +351,10 @@ def _replay_game(
 ) -> int:
     name = f"game {index + 1} (seed {game.seed})"
     _, info = env.reset(seed=game.seed)
+    actions = decode_actions(game.actions)
     ended: str | None = None
     paused, step = False, 0
-    while step < len(game.actions):
+    while step < len(actions):
         if screen is not None:
             for event in (events or screen.pygame.event.get)():
                 command = screen.command(event)
@@ -300,10 +366,10 @@ def _replay_game(
                 continue
         if ended is not None:
             raise RecordingError(
-                f"{name}: the replay ended ({ended}) at step {step} of {len(game.actions)}; the "
+                f"{name}: the replay ended ({ended}) at step {step} of {len(actions)}; the "
                 "recording is of a different game"
             )
-        _, _, terminated, truncated, info = env.step(int(game.actions[step]))
+        _, _, terminated, truncated, info = env.step(actions[step])
         step += 1
         ended = "game over" if terminated else "time limit" if truncated else None
     expected_end = game.end if game.end in ("game over", "time limit") else None
@@ -400,13 +466,17 @@ COMMAND_KEYS = {
 # --- playing --------------------------------------------------------------------------------
 
 
-def keys_help(pygame: Any) -> str:
-    """The keys, as pygame names them, from their declarations (FLIPPER_KEYS, COMMAND_KEYS)."""
+def keys_help(pygame: Any, cabinet: bool = False) -> str:
+    """The keys, as pygame names them, from their declarations (FLIPPER_KEYS, CABINET_KEYS on a
+    table with the cabinet, COMMAND_KEYS)."""
 
     def names(keys: Iterable[str]) -> str:
         return " / ".join(pygame.key.name(getattr(pygame, key)) for key in keys)
 
     parts = [f"{button} flipper: {names(keys)}" for button, keys in PinballEnv.FLIPPER_KEYS.items()]
+    if cabinet:
+        for button, keys in PinballEnv.CABINET_KEYS.items():
+            parts.append(f"{button.replace('_', ' ')}: {names(keys)}")
     for command in dict.fromkeys(COMMAND_KEYS.values()):
         parts.append(f"{command}: {names(k for k, c in COMMAND_KEYS.items() if c == command)}")
     return "keys: " + ", ".join(parts)
@@ -418,14 +488,17 @@ class PlayLoop:
     :meth:`run` plays frames until the player quits or ``max_frames`` frames were shown; it can
     be called again to go on. Each frame takes the frame's events (``events``, by default
     ``pygame.event.get``; tests post key events to the queue), then steps the game once unless
-    it is paused or over, and shows the frame. Held flipper keys are tracked from KEYDOWN and
-    KEYUP events (``pygame.key.get_pressed`` is not updated by every video driver).
+    it is paused or over, and shows the frame. Held button keys are tracked from KEYDOWN and
+    KEYUP events (``pygame.key.get_pressed`` is not updated by every video driver); the action
+    presses the buttons of every key held, however many (``get_keys_to_action``'s map stops at
+    ``MAX_CABINET_KEYS`` keys with a cabinet key), the first nudge winning as in the map.
     :meth:`close` ends the game in play and writes the recording.
 
-    ``options``: ``gym.make`` options of ``Pinball-v0`` (``table`` defaults to ``"classic"``;
-    not ``render_mode`` or ``action_type``, which the tool sets); ``seed``: the first game's
-    (None: a random one; each restart takes the next); ``record``: the recording's path;
-    ``fps``: frames per second, None for real speed, 0 for no waiting (tests).
+    ``options``: ``gym.make`` options of ``env_id`` (``Pinball-v0`` or ``Pinball-v1``;
+    ``table`` defaults to the env's own, ``"classic"`` or ``"classic_v1"``; not
+    ``render_mode`` or ``action_type``, which the tool sets); ``seed``: the first game's (None:
+    a random one; each restart takes the next); ``record``: the recording's path; ``fps``:
+    frames per second, None for real speed, 0 for no waiting (tests).
     """
 
     def __init__(
@@ -434,19 +507,31 @@ class PlayLoop:
         seed: int | None = None,
         record: str | os.PathLike[str] | None = None,
         fps: float | None = None,
+        env_id: str = ENV_ID,
     ) -> None:
-        self.options = {"table": "classic", **(options or {})}
-        self.env = make_env(self.options)
+        if env_id not in ENV_IDS:
+            raise ValueError(f"the play tool plays {' or '.join(ENV_IDS)}, not {env_id!r}")
+        self.options = {"table": default_table(env_id), **(options or {})}
+        self.env = make_env(self.options, env_id=env_id)
         self.screen = _Screen(self.env, fps, "Pinball")
         self._pygame = self.screen.pygame
+        game = self.env.unwrapped.game
         self.keys_to_action = self.env.unwrapped.get_keys_to_action()
-        self.flipper_keys = {key for keys in self.keys_to_action for key in keys}
+        # Each key's buttons, from its one-key entry: held keys press the union of theirs.
+        self.key_buttons = {
+            keys[0]: game.discrete_buttons[action]
+            for keys, action in self.keys_to_action.items()
+            if len(keys) == 1
+        }
+        self._no_buttons = np.zeros(len(game.button_names), dtype=bool)
+        self._nudges = [i for i, name in enumerate(game.button_names) if name.startswith("nudge")]
         self.record = None if record is None else Path(record)
         self.recording = Recording(
-            env_id=ENV_ID,
+            env_id=env_id,
             options=self.options,
             max_episode_steps=self.env.spec.max_episode_steps if self.env.spec else None,
             table_sha256=table_sha256(self.env.unwrapped.table),
+            version=format_version(self.env.action_space.n),
         )
         self.held: set[int] = set()
         self.paused = False
@@ -472,7 +557,7 @@ class PlayLoop:
         self.over = True
         game = GameRecord(
             seed=self.seed,
-            actions="".join(map(str, self.actions)),
+            actions="".join(encode_action(a, self.recording.version) for a in self.actions),
             score=int(self.info["score"]),
             frames=int(self.info["frames"]),
             end=end,
@@ -484,9 +569,9 @@ class PlayLoop:
             write_recording(self.record, self.recording)
 
     def handle(self, event: Any) -> None:
-        """Apply one pygame event: a flipper key down or up, a command, or losing focus."""
+        """Apply one pygame event: a button key down or up, a command, or losing focus."""
         pygame = self._pygame
-        if event.type in (pygame.KEYDOWN, pygame.KEYUP) and event.key in self.flipper_keys:
+        if event.type in (pygame.KEYDOWN, pygame.KEYUP) and event.key in self.key_buttons:
             if event.type == pygame.KEYDOWN:
                 self.held.add(event.key)
             else:
@@ -505,8 +590,14 @@ class PlayLoop:
 
     @property
     def action(self) -> int:
-        """The action of the flipper keys held now (0 when none)."""
-        return int(self.keys_to_action.get(tuple(sorted(self.held)), 0))
+        """The discrete action of the button keys held now (0 when none): their buttons, the
+        first nudge held winning (as ``get_keys_to_action``)."""
+        pressed = self._no_buttons.copy()
+        for key in self.held:
+            pressed |= self.key_buttons[key]
+        nudges = [i for i in self._nudges if pressed[i]]
+        pressed[nudges[1:]] = False
+        return discrete_action(pressed)
 
     def tick(self) -> None:
         """One frame: a step of the game unless paused or over, then the picture."""
@@ -540,7 +631,14 @@ class PlayLoop:
 def main(argv: list[str] | None = None) -> list[int]:
     """The command line; returns the scores of the games played or replayed."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--table", help="table name or YAML path (default classic)")
+    parser.add_argument(
+        "--env",
+        choices=ENV_IDS,
+        help=f"the env to play (default {ENV_ID}; Pinball-v1: the plunger, nudge and tilt)",
+    )
+    parser.add_argument(
+        "--table", help="table name or YAML path (default: the env's, classic or classic_v1)"
+    )
     parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")
     modes = parser.add_mutually_exclusive_group()
     modes.add_argument("--record", type=Path, help="write the games played to this JSON file")
@@ -549,8 +647,8 @@ def main(argv: list[str] | None = None) -> list[int]:
     args = parser.parse_args(argv)
     if args.seed is not None and args.seed < 0:
         parser.error(f"--seed must be >= 0, got {args.seed}")
-    if args.replay is not None and (args.table or args.seed is not None):
-        parser.error("--replay takes the table and the seeds from the recording")
+    if args.replay is not None and (args.env or args.table or args.seed is not None):
+        parser.error("--replay takes the env, the table and the seeds from the recording")
     if args.headless and args.replay is None:
         parser.error("--headless is for --replay: playing needs a window")
     window = not args.headless and has_display()
@@ -579,8 +677,9 @@ def main(argv: list[str] | None = None) -> list[int]:
         raise SystemExit(
             "no display found: playing needs a window (--replay FILE --headless replays without)"
         )
-    print(keys_help(Window.import_pygame()))
-    loop = PlayLoop({"table": args.table or "classic"}, args.seed, args.record)
+    options = {} if args.table is None else {"table": args.table}
+    loop = PlayLoop(options, args.seed, args.record, env_id=args.env or ENV_ID)
+    print(keys_help(Window.import_pygame(), loop.env.unwrapped.game.cabinet))
     try:
         loop.run()
     finally:
