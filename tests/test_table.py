@@ -74,8 +74,8 @@ def test_box_loads() -> None:
 
 def test_load_by_name() -> None:
     assert load_table("box") == load_table(BOX)
-    assert available_tables() == ["classic"] and available_tables("test") == ["box"]
-    assert available_tables("all") == ["box", "classic"]
+    assert available_tables() == ["classic", "classic_v1"] and available_tables("test") == ["box"]
+    assert available_tables("all") == ["box", "classic", "classic_v1"]
 
 
 def test_packed_arrays() -> None:
@@ -870,7 +870,8 @@ def test_from_dict_names_dict_source() -> None:
 
 def test_unknown_name_lists_available_tables() -> None:
     with pytest.raises(
-        TableError, match=r"unknown table 'no_such_table' \(available: classic; test rigs: box\)"
+        TableError,
+        match=r"unknown table 'no_such_table' \(available: classic, classic_v1; test rigs: box\)",
     ):
         load_table("no_such_table")
 
@@ -912,8 +913,10 @@ def test_a_dumped_table_loads_back_as_the_same_table(name: str, tmp_path: Path) 
 def test_built_in_tables_live_in_the_package() -> None:
     folder = builtin_tables_dir()
     assert folder.parent.name == "table" and folder.parent.parent.name == "pinball_env"
-    assert sorted(p.name for p in folder.glob("*.yaml")) == ["box.yaml", "classic.yaml"]
+    assert sorted(p.name for p in folder.glob("*.yaml")) == [
+        "box.yaml", "classic.yaml", "classic_v1.yaml"
+    ]  # fmt: skip
     with pytest.raises(
-        TableError, match=r"unknown table 'nope' \(available: classic; test rigs: box\)"
+        TableError, match=r"unknown table 'nope' \(available: classic, classic_v1; test rigs: box\)"
     ):
         load_table("nope")
