@@ -20,7 +20,6 @@ import numpy as np
 
 from agents.envs import FrameCounter
 from agents.rollouts import HeuristicPlayers
-from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 
 BATCH_SIZE = 512
 
@@ -33,7 +32,6 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
     n = venv.num_envs
     game = venv.get_attr("game")[0]
     players = HeuristicPlayers(game.world)
-    balls = game.world.balls  # the heuristic reads the ball's state, as from the env's info
     raw = getattr(venv, "get_original_obs", None)
     obs = venv.reset()
     observations, actions, rewards, dones = [], [], [], []
@@ -42,9 +40,9 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
         if step and stop:
             break
         observations.append(raw() if raw else obs)
+        infos = game.infos()  # the env's infos (with the cabinet's keys on Pinball-v1)
         action = np.array([
-            players(env, {"ball_position": balls[env, [BALL_X, BALL_Y]],
-                          "ball_velocity": balls[env, [BALL_VX, BALL_VY]]})
+            players(env, {key: values[env] for key, values in infos.items()})
             for env in range(n)
         ])  # fmt: skip
         obs, reward, done, infos = venv.step(action)

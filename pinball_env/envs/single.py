@@ -60,7 +60,7 @@ class PinballEnv(CoreAttributes, gym.Env):
     (left and right cancel). The plunger: while its button is held it pulls back (the
     table's ``stroke`` in ``pull_time``: 5 cm in 1 s on ``classic_v1``); let go, it fires a
     ball waiting on it at a speed linear in the pull (``pull_speed``: 0.5 m/s at the shortest
-    pull to 3.6 m/s at the whole stroke). A nudge shoves the cabinet (``nudge_impulse``, 36 N s
+    pull to 3.6 m/s at the whole stroke, give or take the ``scatter``). A nudge shoves the cabinet (``nudge_impulse``, 36 N s
     on the 120 kg cabinet: 0.3 m/s); a nudge held or pressed again within ``nudge_interval``
     (0.25 s) of the last shove does nothing, the fastest the cabinet can be shoved. The cabinet
     swings back on its legs (a mass-spring-damper); the ball, simulated relative to the
@@ -159,8 +159,9 @@ class PinballEnv(CoreAttributes, gym.Env):
     (BALL_SEARCH_TIME: waiting, or plunged too softly and fallen back) is fired by the machine
     at a speed drawn from the plunger's range, so every game still ends. The skill shot: the
     rollover ``skill_lane`` (under the top arch, on the right) is lit for 1.25 s after the
-    player's plunge and scores 1000 points if crossed while lit: a pull of 56-58 frames (of the
-    60 of the whole stroke) makes it. The tilt: a plumb bob (a
+    player's plunge and scores 1000 points if crossed while lit: a pull of 56 frames (of the 60
+    of the whole stroke) makes it nearly always. The plunge's speed varies by up to the table's
+    ``scatter`` (0.05 m/s), drawn from the env's random stream. The tilt: a plumb bob (a
     0.1 m pendulum) swings with the cabinet; each time it touches its ring (5 degrees from
     vertical) is a warning, forgotten after 10 s without another; the touch after 2 warnings
     tilts the machine: the flippers and kickers go dead, nothing scores, the ball is lost

@@ -45,7 +45,6 @@ class Rules(NamedTuple):
     plunger_y: float
     stroke: float  # the plunger's pull back [m]
     pull_step: float  # its pull in a frame [m]
-    pull_speeds: tuple[float, float]  # launch speed at the shortest pull and the whole stroke
     nudge_impulse: float  # [N s]
     nudge_frames: int  # shortest time between two shoves [frames]
     warnings: int  # ring touches that warn; the next tilts
@@ -77,6 +76,7 @@ class StepProgress(NamedTuple):
     frame_points: np.ndarray  # (N,) int64: points of the frame under way
     frame_drained: np.ndarray  # (N,) bool: the frame under way drained a ball
     launch: np.ndarray  # (N,) bool: waits for a ball off the plunger before it goes on
+    plunge: np.ndarray  # (N,) bool: ... fired by the player's plunger (else by the machine)
     finite: np.ndarray  # (N,) bool: the ball state stayed finite
     skill_shot: np.ndarray  # (N,) bool: the skill shot was made in the step
     tilt: np.ndarray  # (N,) bool: the machine tilted in the step
@@ -95,7 +95,8 @@ def play_frames(
 ):  # fmt: skip
     """Take the step of envs ``start`` to ``stop`` on from where each is (``progress.stage``),
     each env's frames one after another, to its end (STEP_DONE), or to where it needs a launch
-    (``progress.launch``; Python draws it from the env's stream), or, unless ``swept``, the
+    (``progress.launch``, and ``progress.plunge`` for the player's plunger; Python draws it from
+    the env's stream), or, unless ``swept``, the
     physics of a frame (PHYSICS; Python runs the world's backend). With ``swept`` the physics
     is the swept kernel's :func:`step_ball`, on ``geometries[env]`` and ``settings[env]`` (or
     their only entries, see ``World.tables``); a ball state that is no longer finite ends the
@@ -127,7 +128,7 @@ def play_frames(
     points, drained = progress.points, progress.drained
     height_before = progress.height_before
     frame_points, frame_drained = progress.frame_points, progress.frame_drained
-    launch, finite = progress.launch, progress.finite
+    launch, finite, plunge = progress.launch, progress.finite, progress.plunge
     cabinet, tilted, skill_shot, tilt = (
         world.cabinet,
         world.tilted,
@@ -173,14 +174,10 @@ def play_frames(
                     if held and cabinet_buttons[env, 0]:
                         pull[env] = min(pull[env] + rules.pull_step, rules.stroke)
                     elif pull[env] > 0.0:
-                        if on_plunger[env]:
-                            low, high = rules.pull_speeds
-                            speed = low + (high - low) * pull[env] / rules.stroke
-                            put_ball(balls[env], rules.plunger_x, rules.plunger_y, speed)
-                            active[env] = True
-                            on_plunger[env] = False
-                            skill_left[env] = rules.skill_frames
-                        pull[env] = 0.0
+                        if on_plunger[env]:  # Python fires it: the scatter is a random draw
+                            plunge[env] = launch[env] = True
+                        else:
+                            pull[env] = 0.0
                     # The nudge: a shove along the pressed directions, once per nudge_frames.
                     if nudge_wait[env] > 0:
                         nudge_wait[env] -= 1
@@ -338,6 +335,7 @@ def new_progress(n_envs: int) -> StepProgress:
         frame_points=np.zeros(n_envs, dtype=np.int64),
         frame_drained=np.zeros(n_envs, dtype=bool),
         launch=np.zeros(n_envs, dtype=bool),
+        plunge=np.zeros(n_envs, dtype=bool),
         finite=np.ones(n_envs, dtype=bool),
         skill_shot=np.zeros(n_envs, dtype=bool),
         tilt=np.zeros(n_envs, dtype=bool),

@@ -250,10 +250,19 @@ class Game:
             self._moved(env)
 
     def launch(self, env: int, rng: np.random.Generator) -> None:
-        """Fire env ``env``'s next ball off the plunger at a speed drawn from the table's range
-        (with the player's plunger: the ball search's launch of a ball left waiting on it)."""
-        low, high = self.world.table_of(env).plunger.speed
-        self.world.launch(env, float(rng.uniform(low, high)))
+        """Fire env ``env``'s ball off the plunger: the player's plunge at the speed of its pull
+        and a scatter drawn from ``rng``; else the machine's launch, at a speed drawn from the
+        table's range (the next ball, or with the player's plunger the ball search's launch of
+        a ball left in the shooter lane)."""
+        plunger = self.world.table_of(env).plunger
+        if self._progress.plunge[env]:
+            self._progress.plunge[env] = False
+            scatter = float(rng.uniform(-plunger.scatter, plunger.scatter))
+            self.world.launch(env, plunger.launch_speed(self.state.plunger_pull[env]) + scatter)
+            self.state.skill_left[env] = self._rules_now().skill_frames
+        else:
+            low, high = plunger.speed
+            self.world.launch(env, float(rng.uniform(low, high)))
         self.state.on_plunger[env] = False
         self.state.plunger_pull[env] = 0.0
         self._moved(env)
@@ -345,16 +354,18 @@ class Game:
             if not progress.finite.all():
                 bad = np.flatnonzero(~progress.finite).tolist()
                 raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
-            physics = progress.stage == PHYSICS  # (not swept) the backend's frame is due
+            # Launches first: the player's plunge hands back before its frame's physics.
+            launches = np.flatnonzero(progress.launch)
+            for env in launches:
+                self.launch(env, rngs[env])
+            progress.launch[:] = False
+            # (Not swept) the backend's frame is due.
+            physics = (progress.stage == PHYSICS) & (not swept)
             if physics.any():
                 self.world.step(None, physics)
                 progress.stage[physics] = AFTER_PHYSICS
                 if self.on_frame is not None:
                     self.on_frame()
-            launches = np.flatnonzero(progress.launch)
-            for env in launches:
-                self.launch(env, rngs[env])
-            progress.launch[:] = False
             if not physics.any() and len(launches) == 0:
                 break
         self.state.points[playing] = progress.points[playing]
@@ -397,7 +408,7 @@ class Game:
         skill_sensors = np.full(self.n_envs, -1, dtype=np.int64)
         if not self.cabinet:
             return dict(cabinet=False, plunger_x=0.0, plunger_y=0.0, stroke=0.0, pull_step=0.0,
-                        pull_speeds=(0.0, 0.0), nudge_impulse=0.0, nudge_frames=0, warnings=0,
+                        nudge_impulse=0.0, nudge_frames=0, warnings=0,
                         warning_frames=0, skill_sensors=skill_sensors, skill_bonus=0,
                         skill_frames=0)  # fmt: skip
         skill = plunger.skill_shot
@@ -411,7 +422,6 @@ class Game:
             plunger_y=float(plunger.position[1]),
             stroke=plunger.stroke,
             pull_step=plunger.stroke / (plunger.pull_time * rate),
-            pull_speeds=tuple(map(float, plunger.pull_speed)),
             nudge_impulse=cabinet.nudge_impulse,
             nudge_frames=max(1, round(cabinet.nudge_interval * rate)),
             warnings=tilt.warnings,

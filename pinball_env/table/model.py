@@ -169,6 +169,9 @@ class Plunger:
     pull_time: float | None = None  # time a steady pull takes over the whole stroke [s]
     # Launch speed at the shortest pull and at the whole stroke (linear between) [m/s].
     pull_speed: tuple[float, float] | None = None
+    # A real plunger never fires twice alike (VPX's "scatter velocity"): the player's launch
+    # speed varies by up to this much either way, drawn from the env's random stream [m/s].
+    scatter: float = 0.0
     skill_shot: SkillShot | None = None
 
     @property

@@ -545,6 +545,7 @@ def _plunger(value: object, loc: _Loc, point: Parser) -> Plunger:
         "stroke": partial(_number, low=0.005, high=0.2),  # [m]: a real one pulls ~5 cm
         "pull_time": partial(_number, low=0.05, high=5.0),  # [s]
         "pull_speed": speed,
+        "scatter": partial(_number, low=0.0, high=1.0),  # [m/s]
         "skill_shot": _skill_shot,
     }
     plunger = _record(Plunger, value, loc, parsers)
@@ -559,8 +560,14 @@ def _plunger(value: object, loc: _Loc, point: Parser) -> Plunger:
             "a player's plunger needs stroke, pull_time and pull_speed together; missing "
             + ", ".join(manual)
         )
-    if plunger.skill_shot is not None and not plunger.manual:
-        loc.key("skill_shot").fail("a skill shot needs the player's plunger (stroke, ...)")
+    for key in ("skill_shot", "scatter"):
+        if getattr(plunger, key) and not plunger.manual:
+            loc.key(key).fail(f"a {key.replace('_', ' ')} needs the player's plunger (stroke, ...)")
+    if plunger.manual and plunger.scatter >= plunger.pull_speed[0]:
+        loc.key("scatter").fail(
+            f"a scatter of {plunger.scatter:g} m/s could stop the shortest pull's "
+            f"{plunger.pull_speed[0]:g} m/s launch (it must be smaller)"
+        )
     return plunger
 
 

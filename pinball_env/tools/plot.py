@@ -176,15 +176,16 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     draw_table(ax, table, labels=False)
     rate = table.simulation.frame_rate
     pull_frames = round(table.plunger.pull_time * rate)
-    for frames, colour in ((pull_frames - 3, "#2a9d8f"), (pull_frames, "#e76f51")):
+    for frames, colour in ((pull_frames - 4, "#2a9d8f"), (pull_frames, "#e76f51")):
         env = PinballEnv(table=table)
         env.reset(seed=0)
-        path = []
+        path, speed = [], 0.0
         for step in range(frames + round(table.plunger.skill_shot.time * rate)):
             _, _, _, _, info = env.step(4 if step < frames else 0)
             path.append(info["ball_position"])
+            if step == frames:  # the launch, one frame of gravity ago
+                speed = info["ball_velocity"][1] - table.gravity_vector[1] / rate
         path = np.array(path)
-        speed = table.plunger.launch_speed(min(frames / pull_frames, 1) * table.plunger.stroke)
         ax.plot(*path.T, color=colour, lw=1.2, label=f"pull {frames} frames: {speed:.2f} m/s")
     ax.legend(loc="lower left", fontsize=7)
     ax.set_title("the plunger: the skill shot and a whole stroke", fontsize=9)
