@@ -96,8 +96,8 @@ def play_frames(
     """Take the step of envs ``start`` to ``stop`` on from where each is (``progress.stage``),
     each env's frames one after another, to its end (STEP_DONE), or to where it needs a launch
     (``progress.launch``, and ``progress.plunge`` for the player's plunger; Python draws it from
-    the env's stream), or, unless ``swept``, the
-    physics of a frame (PHYSICS; Python runs the world's backend). With ``swept`` the physics
+    the env's stream), or, unless ``swept``, the physics of a frame (PHYSICS; Python runs the
+    world's backend). With ``swept`` the physics
     is the swept kernel's :func:`step_ball`, on ``geometries[env]`` and ``settings[env]`` (or
     their only entries, see ``World.tables``); a ball state that is no longer finite ends the
     env's step (``progress.finite``).
@@ -229,7 +229,7 @@ def play_frames(
                     if launch[env] or caught:
                         # The next ball, or one fallen back down the shooter lane, waits on the
                         # plunger for the player.
-                        put_ball(ball, rules.plunger_x, rules.plunger_y, 0.0)
+                        put_ball(ball, rules.plunger_x, rules.plunger_y)
                         active[env] = False
                         on_plunger[env] = True
                         skill_left[env] = 0
@@ -276,12 +276,11 @@ def play_frames(
 
 
 @njit(cache=True)
-def put_ball(ball, x, y, speed):
-    """Put ``ball`` (a row of the balls array) at (x, y) moving straight up at ``speed``."""
+def put_ball(ball, x, y):
+    """Put ``ball`` (a row of the balls array) at rest at (x, y)."""
     ball[:] = 0.0
     ball[BALL_X] = x
     ball[BALL_Y] = y
-    ball[BALL_VY] = speed
 
 
 @njit(cache=True)

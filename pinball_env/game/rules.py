@@ -160,13 +160,12 @@ class Game:
                 f"table {table.name!r} has another ball size or simulation settings than "
                 f"{self.table.name!r}: every env of a game needs the same"
             )
-        if (table.cabinet, table.tilt, table.plunger.manual) != (
-            self.table.cabinet,
-            self.table.tilt,
-            self.table.plunger.manual,
-        ):
+        # The step loop reads the cabinet's numbers, the player's plunger's among them, once.
+        cabinet = (table.cabinet, table.tilt, table.plunger if table.has_cabinet else None)
+        if cabinet != (self.table.cabinet, self.table.tilt, self.table.plunger if self.cabinet
+                       else None):  # fmt: skip
             raise ValueError(
-                f"table {table.name!r} has another cabinet, tilt or plunger than "
+                f"table {table.name!r} has another cabinet, tilt or player's plunger than "
                 f"{self.table.name!r}: every env of a game needs the same"
             )
         self.world.set_table(env, table)
