@@ -1,7 +1,7 @@
 """Evaluation rollouts: whole games on fixed seeds that training never used.
 
     python -m agents.evaluate --model RUN_OR_ZIP --episodes 100 [--video game.mp4] [--curve]
-    python -m agents.evaluate --policy heuristic --episodes 100
+    python -m agents.evaluate --policy heuristic --episodes 100 [--env Pinball-v1]
     python -m agents.evaluate --model RUN_OR_ZIP --watch [--episodes 3]
 
 Each game is played to its end (the last ball drained, or the two-minute time limit), on seeds
@@ -53,7 +53,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     who = parser.add_mutually_exclusive_group(required=True)
     who.add_argument("--model", type=Path, help="a run folder or model zip (or RLlib checkpoint)")
     who.add_argument("--policy", choices=BASELINES, help="a baseline")
-    parser.add_argument("--table", help="the baselines' table (default: classic)")
+    parser.add_argument("--env", help="the baselines' env id (default: Pinball-v0)")
+    parser.add_argument("--table", help="the baselines' table (default: the env's)")
     parser.add_argument("--episodes", type=int, default=100, help="games to play")
     parser.add_argument("--seed", type=int, help="first game's seed (default: eval_seed)")
     parser.add_argument("--out", type=Path, help="where to write the results")
@@ -63,8 +64,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     try:
         return evaluate(
-            policy=args.policy, model_path=args.model, table=args.table, episodes=args.episodes,
-            seed=args.seed, out=args.out, video=args.video, curve=args.curve, watch=args.watch,
+            policy=args.policy, model_path=args.model, table=args.table, env=args.env,
+            episodes=args.episodes, seed=args.seed, out=args.out, video=args.video,
+            curve=args.curve, watch=args.watch,
         )  # fmt: skip
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")

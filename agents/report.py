@@ -38,6 +38,7 @@ def evaluate(
     policy: str | None = None,
     model_path: Path | None = None,
     table: str | None = None,
+    env: str | None = None,
     episodes: int = 100,
     seed: int | None = None,
     out: Path | None = None,
@@ -47,16 +48,17 @@ def evaluate(
     watch: bool = False,
 ) -> dict[str, Any]:
     """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
-    returns the summary. A baseline plays on ``table``, or on the env (and layouts) of the
-    config ``like``. With ``watch``, the games are shown in a window instead (nothing is
-    written)."""
+    returns the summary. A baseline plays the env ``env`` (default ``Pinball-v0``) on ``table``
+    (default the env's), or the env (and layouts) of the config ``like``. With ``watch``, the
+    games are shown in a window instead (nothing is written)."""
     if (policy is None) == (model_path is None):
         raise ConfigError("give a model or a policy (random or heuristic), not both")
     if episodes < 1:
         raise ConfigError(f"episodes must be >= 1, got {episodes}")
     if policy is not None:
         if policy in BASELINES and like is None:
-            like = config_from_dict({"env": {"kwargs": {"table": table} if table else {}}})
+            kwargs = {"kwargs": {"table": table} if table else {}}
+            like = config_from_dict({"env": {**kwargs, **({"id": env} if env else {})}})
         player = baseline_player(policy, like)
         out = out or Path("evals") / policy
     else:

@@ -17,6 +17,7 @@ from agents.envs import make_env
 from agents.imitation import discounted_returns, imitate, teacher_games
 from agents.policy import load_policy
 from agents.runs import atomic_write, latest_checkpoint, save_model
+from pinball_env.table import load_table
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIGS_DIR = ROOT / "configs" / "agents"
@@ -187,6 +188,18 @@ def test_baselines_evaluate_with_video(tmp_path):
     )  # fmt: skip
     assert json.loads((tmp_path / "r/summary.json").read_text()) == random
     assert (tmp_path / "game.mp4").read_bytes()[4:8] == b"ftyp"  # an MP4 container
+
+
+def test_baselines_play_the_env_asked_for(tmp_path):
+    """--env Pinball-v1: the heuristic plunges (every game's first ball waits on the plunger:
+    the machine's 10 s wait would show in the length) and scores the skill shot's bonus."""
+    summary = evaluate.main(
+        ["--policy", "heuristic", "--env", "Pinball-v1", "--episodes", "2", "--out",
+         str(tmp_path / "h")]
+    )  # fmt: skip
+    assert summary["score_mean"] > 3 * load_table("classic_v1").plunger.skill_shot.bonus
+    with pytest.raises(SystemExit):  # Pinball-v1's table is its own
+        evaluate.main(["--policy", "random", "--env", "Pinball-v1", "--table", "classic"])
 
 
 def test_report_writes_the_comparison_curve_and_game(tmp_path):
