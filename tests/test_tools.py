@@ -3,6 +3,8 @@
 import importlib.util
 import json
 
+import pytest
+
 from pinball_env.tools import benchmark, plot
 
 
@@ -20,6 +22,8 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "kernel_ns_per_ball_element_test",
         "startup_warm_seconds",
         "ratio_native1024_2thread_to_sync8_pymunk",
+        "v1_native1024_2thread_steps_per_second",
+        "ratio_v1_native1024_2thread_to_native1024_2thread",
     ):
         assert saved[key] == result[key] > 0, key
     assert "native4096_1thread_steps_per_second" in capsys.readouterr().out
@@ -29,6 +33,13 @@ def test_draw_renders_tables_and_traces(tmp_path):
     for table in ("classic", "box"):
         out = plot.main([table, "--out", str(tmp_path / f"{table}.png"), "--trace", "30"])
         assert out.stat().st_size > 10_000
+
+
+def test_draw_shows_the_cabinet_at_work(tmp_path):
+    out = plot.main(["classic_v1", "--cabinet", "--out", str(tmp_path / "cabinet.png")])
+    assert out.read_bytes()[:4] == b"\x89PNG" and out.stat().st_size > 20_000
+    with pytest.raises(ValueError, match="has no cabinet"):
+        plot.main(["classic", "--cabinet", "--out", str(tmp_path / "none.png")])
 
 
 def test_the_tools_run_as_modules_of_pinball_env_tools():

@@ -10,6 +10,7 @@ Measures, with uniformly random actions on the classic table (state observations
 - the native vector env as agents train on it (``TRAINING_KWARGS``: frame skip 2, the step
   running on while the ball is high, shaping) at N = 32 and 128, 1 thread: each step is about
   15 frames of every env;
+- ``Pinball-v1``'s (the whole cabinet) native vector env at N = 1024 with 1 and 2 threads;
 - ``PinballProcgen-v0``'s native vector env at N = 1024 with 2 threads, each env on its own
   generated table (16 layouts, generated before the timing), with 16 rays in the observation;
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
@@ -60,6 +61,7 @@ RATIOS = (
     ("native1024_2thread", "native1024_1thread"),
     ("native1024_2thread", "cartpole_vec1024"),
     ("procgen1024_16layouts_2thread", "native1024_2thread"),
+    ("v1_native1024_2thread", "native1024_2thread"),
     ("single_swept", "cartpole_single"),
     ("single_swept", "single_pymunk"),
 )
@@ -152,8 +154,10 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
         )
         return steps_per_second(env, steps(1000 if physics == "swept" else 200), seed)
 
-    def native(n: int, threads: int, obs_type: str = "state", **kwargs: float) -> float:
-        env = gym.make_vec("Pinball-v0", num_envs=n, num_threads=threads, obs_type=obs_type,
+    def native(
+        n: int, threads: int, obs_type: str = "state", env_id: str = "Pinball-v0", **kwargs: float
+    ) -> float:
+        env = gym.make_vec(env_id, num_envs=n, num_threads=threads, obs_type=obs_type,
                            **kwargs)  # fmt: skip
         return steps_per_second(env, steps(max(300, 300_000 // max(n, 100))), seed)
 
@@ -168,6 +172,9 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
             figures.append((f"native{n}_{threads}thread", lambda n=n, t=threads: native(n, t)))
     for n in (32, 128):
         figures.append((f"training{n}_1thread", lambda n=n: native(n, 1, **TRAINING_KWARGS)))
+    for threads in (1, 2):  # the whole cabinet: plunger, nudges (random ones tilt), the bob
+        figures.append((f"v1_native1024_{threads}thread",
+                        lambda t=threads: native(1024, t, env_id="Pinball-v1")))  # fmt: skip
     cartpole = gym.make("CartPole-v1")
     cartpoles = gym.make_vec("CartPole-v1", num_envs=1024)
 
