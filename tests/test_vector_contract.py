@@ -18,7 +18,8 @@ from pinball_env.vector_env import PinballVectorEnv
 # within a few hundred steps. Procgen plays two layouts (tables are cached for the session).
 ENVS = {
     "Pinball-v0": {"balls": 1, "frame_skip": 3, "max_episode_steps": 60},
-    "Pinball-v1": {"balls": 1, "frame_skip": 3, "max_episode_steps": 60},
+    # (a ball waits on the plunger: longer steps, so that random play drains one in time)
+    "Pinball-v1": {"balls": 1, "frame_skip": 15, "max_episode_steps": 60},
     "PinballProcgen-v0": {"balls": 1, "frame_skip": 3, "max_episode_steps": 60,
                           "num_layouts": 2, "rays": 4},
 }  # fmt: skip
