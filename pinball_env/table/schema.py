@@ -396,7 +396,13 @@ def table_to_dict(table: Table) -> dict[str, Any]:
     for group in ("walls", "posts", "flippers", "sensors"):
         data[group] = [plain(element) for element in getattr(table, group)]
     if table.plunger is not None:
-        data["plunger"] = {k: v for k, v in plain(table.plunger).items() if v is not None}
+        # The player's plunger's fields only where set: a machine's plunger writes as it always
+        # did (digests of tables, such as a recording's, stay the same).
+        defaults = {f.name: f.default for f in fields(Plunger)}
+        data["plunger"] = {
+            key: value for key, value in plain(table.plunger).items()
+            if _plain(defaults[key]) != value
+        }  # fmt: skip
     for section in ("cabinet", "tilt"):
         if getattr(table, section) is not None:
             data[section] = plain(getattr(table, section))
