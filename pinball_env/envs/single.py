@@ -60,8 +60,9 @@ class PinballEnv(CoreAttributes, gym.Env):
     (left and right cancel). The plunger: while its button is held it pulls back (the
     table's ``stroke`` in ``pull_time``: 5 cm in 1 s on ``classic_v1``); let go, it fires a
     ball waiting on it at a speed linear in the pull (``pull_speed``: 0.5 m/s at the shortest
-    pull to 3.6 m/s at the whole stroke, give or take the ``scatter``). A nudge shoves the cabinet (``nudge_impulse``, 36 N s
-    on the 120 kg cabinet: 0.3 m/s); a nudge held or pressed again within ``nudge_interval``
+    pull to 3.6 m/s at the whole stroke, give or take the ``scatter``). A nudge shoves the
+    cabinet (``nudge_impulse``, 36 N s on the 120 kg cabinet: 0.3 m/s); a nudge held or
+    pressed again within ``nudge_interval``
     (0.25 s) of the last shove does nothing, the fastest the cabinet can be shoved. The cabinet
     swings back on its legs (a mass-spring-damper); the ball, simulated relative to the
     table, feels the cabinet's acceleration opposite, so a nudge moves the table under it by a

@@ -94,6 +94,7 @@ class Scratch(NamedTuple):
     held: np.ndarray  # (N, F) bool: flippers stopped for the rest of a substep (a wedged ball)
     crossings: np.ndarray  # (N, K) float64: sensor crossings of one move [fraction]
     hit_elements: np.ndarray  # (N, max_passes) int64: hits of one substep, committed at its end
+    cabinet_dv: np.ndarray  # (N, substeps, 2) float64: the cabinet's velocity change per substep
 
 
 @njit(cache=True, inline="always")
@@ -201,4 +202,5 @@ def make_scratch(geometry: Geometry, settings: Settings, n_envs: int) -> Scratch
         held=np.zeros(flippers, dtype=np.bool_),
         crossings=np.zeros((n_envs, geometry.sensors.shape[0])),
         hit_elements=np.zeros((n_envs, settings.max_passes), dtype=np.int64),
+        cabinet_dv=np.zeros((n_envs, settings.substeps, 2)),
     )

@@ -36,14 +36,13 @@ import math
 
 from numba import njit
 
-from pinball_env.physics.cabinet import cabinet_substep
+from pinball_env.physics.cabinet import cabinet_frame
 from pinball_env.physics.columns import (
     BALL_SPIN,
     BALL_VX,
     BALL_VY,
     BALL_X,
     BALL_Y,
-    BOB_TOUCHES,
     CONTACT_ELEMENT,
     CONTACT_SPEED,
     CONTACT_TIME,
@@ -519,9 +518,10 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     state.contact_count[env] = 0
     state.hits[env, :] = 0
     has_cabinet = geometry.cabinet.shape[0] > 0
+    cabinet_dv = scratch.cabinet_dv[env]  # the cabinet's velocity change in each substep
     if has_cabinet:
-        state.cabinet[env, BOB_TOUCHES] = 0.0
-    dvx = dvy = 0.0  # the cabinet's velocity change in a substep (none without a cabinet)
+        cabinet_frame(state.cabinet[env], geometry.cabinet[0], h, cabinet_dv)
+    dvx = dvy = 0.0  # (none without a cabinet)
     kick_scale = 0.0 if state.tilted[env] else 1.0  # a tilted machine's kickers are dead
     ball = state.balls[env]
     x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
@@ -535,7 +535,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
         held_time = h
         x0, y0 = x, y
         if has_cabinet:
-            dvx, dvy = cabinet_substep(state.cabinet[env], geometry.cabinet[0], h)
+            dvx, dvy = cabinet_dv[k, 0], cabinet_dv[k, 1]
         if state.active[env]:
             # Relative to the cabinet, the ball feels its acceleration opposite (a frame force).
             vx += settings.gravity_x * h - dvx
