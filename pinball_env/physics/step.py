@@ -517,12 +517,14 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     held, hit_elements = scratch.held[env], scratch.hit_elements[env]
     state.contact_count[env] = 0
     state.hits[env, :] = 0
+    # The cabinet, on a table with one: its frame first (the velocity change of each substep),
+    # then the ball's substeps. A tilted machine's kickers are dead.
     has_cabinet = geometry.cabinet.shape[0] > 0
-    cabinet_dv = scratch.cabinet_dv[env]  # the cabinet's velocity change in each substep
+    cabinet_dv = scratch.cabinet_dv[env]
+    dvx = dvy = 0.0
     if has_cabinet:
         cabinet_frame(state.cabinet[env], geometry.cabinet[0], h, cabinet_dv)
-    dvx = dvy = 0.0  # (none without a cabinet)
-    kick_scale = 0.0 if state.tilted[env] else 1.0  # a tilted machine's kickers are dead
+    kick_scale = 0.0 if state.tilted[env] else 1.0
     ball = state.balls[env]
     x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
     for k in range(settings.substeps):
