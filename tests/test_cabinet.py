@@ -8,7 +8,10 @@ vector env bitwise N single envs).
 
 import dataclasses
 import math
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -615,3 +618,35 @@ def test_soft_plunges_cannot_keep_a_ball_in_the_shooter_lane(table):
             break
     assert info["ball_position"][1] > 0.8  # out over the gate, into the playfield
     assert step >= round(BALL_SEARCH_TIME * 60) - 1  # ... by the machine, after the wait
+
+
+V1_ROLLOUT = """
+import hashlib
+import gymnasium as gym
+import numpy as np
+import pinball_env
+
+env = gym.make("Pinball-v1")
+result = hashlib.sha256()
+env.reset(seed=7)
+rng = np.random.default_rng(1)
+for step in range(900):
+    action = 4 if step < 56 else int(rng.integers(32))  # a plunge, then anything
+    obs, reward, terminated, truncated, info = env.step(action)
+    result.update(obs.tobytes() + np.float64(reward).tobytes())
+    if terminated or truncated:
+        env.reset()
+print(result.hexdigest())
+"""
+
+
+def test_pinball_v1_games_are_bitwise_identical_across_processes():
+    def run() -> str:
+        result = subprocess.run(
+            [sys.executable, "-c", V1_ROLLOUT], capture_output=True, text=True, check=True,
+            timeout=300, cwd=Path(__file__).resolve().parent.parent,
+        )  # fmt: skip
+        return result.stdout.strip()
+
+    first = run()
+    assert first == run() and len(first) == 64
