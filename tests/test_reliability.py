@@ -418,7 +418,8 @@ def test_balls_in_tight_places_around_the_flippers_stay_sound(radius, along, gap
     placed = 0
     for _ in range(2000):
         x, y = spot + rng.uniform(-0.06, 0.06, size=2)
-        if deepest_overlap(x, y, world.geometry, angles, radius) < -table.simulation.skin:
+        up = world.state.targets_up[0]
+        if deepest_overlap(x, y, world.geometry, angles, up, radius) < -table.simulation.skin:
             world.place_ball(placed, (x, y), rng.normal(0.0, 0.5, size=2))
             placed += 1
             if placed == 8:

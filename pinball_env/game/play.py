@@ -13,6 +13,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pinball_env.game.rulebook import RuleBook, end_of_ball, run_rules
 from pinball_env.physics import first_flipper
 from pinball_env.physics.columns import (
     BALL_VY,
@@ -52,6 +53,7 @@ class Rules(NamedTuple):
     skill_sensors: np.ndarray  # (N,) int64: element id of the skill-shot rollover (-1: none)
     skill_bonus: int  # [points]
     skill_frames: int  # how long the skill shot stays lit after a plunge [frames]
+    book: RuleBook  # the table's rules and ball save (``game.rulebook``)
 
 
 class StepProgress(NamedTuple):
@@ -155,6 +157,8 @@ def play_frames(
                 drained[env] = False
                 finite[env] = True
                 skill_shot[env] = tilt[env] = False
+                if rules.book.active:
+                    state.rule_events[env, :] = 0
                 stage[env] = NEXT_FRAME
             elif now == NEXT_FRAME:
                 k = frames[env]
@@ -210,14 +214,26 @@ def play_frames(
                         env, scored, rules, hits, cabinet, tilted, active, on_plunger,
                         warnings, warning_age, skill_left, skill_shot, tilt, still_frames,
                     )  # fmt: skip
-                score[env] += scored
                 gone = balls_left[env] > 0 and not active[env] and not on_plunger[env]
+                saved = False
+                if rules.book.active:
+                    # The rules (a tilted machine plays none), the ball save, the bonus.
+                    if not tilted[env]:
+                        scored += run_rules(env, rules.book, state, scores[env])
+                        if state.save_frames[env] > 0:
+                            state.save_frames[env] -= 1
+                    if gone:
+                        award = end_of_ball(env, rules.book, state, tilted[env])
+                        saved = award < 0
+                        gone = not saved
+                        scored += max(award, 0)
+                score[env] += scored
                 if gone:
                     drain_height[env] = balls[env, BALL_Y]
                     balls_left[env] -= 1
                 frame_points[env] = scored
                 frame_drained[env] = gone
-                launch[env] = gone and balls_left[env] > 0
+                launch[env] = (gone and balls_left[env] > 0) or saved
                 if rules.cabinet:
                     ball = balls[env]
                     caught = (

@@ -28,12 +28,14 @@ from pinball_env.game.play import (
     new_progress,
     play_frames,
 )
+from pinball_env.game.rulebook import RuleBook, compile_rules
 from pinball_env.options import PinballOptions
 from pinball_env.physics import State
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, CABINET_X, CABINET_Y
 from pinball_env.sim.backends import make_world
 from pinball_env.sim.world import compiled_entry
 from pinball_env.table import BUTTONS, TEST_TABLES, Table, check_ball_state
+from pinball_env.table.rules import RuleSet
 
 # A discrete action of a table without a cabinet is the flipper buttons held as bits: bit i is
 # button BUTTONS[i] (0 none, 1 left, 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's
@@ -73,6 +75,17 @@ class GameState(NamedTuple):
     warning_age: np.ndarray  # (N,) int64: frames since the last warning
     skill_left: np.ndarray  # (N,) int64: frames the skill shot stays lit (0: dark)
     lane_frames: np.ndarray  # (N,) int64: frames the ball has stayed in the shooter lane
+    # The rules (tables with them, see ``game.rulebook``; the targets' state is the kernel's).
+    lights: np.ndarray  # (N, L) bool
+    counters: np.ndarray  # (N, C) int64
+    timers: np.ndarray  # (N, Tm) int64: frames each timer still runs (0: stopped)
+    bonus: np.ndarray  # (N,) int64: the end-of-ball bonus so far [points]
+    multiplier: np.ndarray  # (N,) int64: the bonus multiplier (1 to max_multiplier)
+    save_frames: np.ndarray  # (N,) int64: frames the ball save lasts (-1: from the launch, 0: off)
+    rule_points: np.ndarray  # (N,) int64: points the rules scored in this game
+    rule_events: np.ndarray  # (N, R + 2) int64: rules fired in the last step (RuleSet.event_names)
+    lights_were_on: np.ndarray  # (N, R) bool: a lights_on rule's lights were all lit
+    flippers_before: np.ndarray  # (N, F) bool: the flipper commands of the last frame
 
 
 class Game:
@@ -119,6 +132,11 @@ class Game:
         self.skip_above = options.skip_above
         self.max_frames = options.max_frames
         self.world = make_world(table, n_envs, options.physics, num_threads)
+        self.book: RuleBook = compile_rules(table)
+        self.rule_set = table.rules
+        rule_set = table.rules or RuleSet()
+        self.event_names = rule_set.event_names
+        n_rules, n_flippers = len(self.book.trigger_kind), len(table.flippers)
         self.state = GameState(
             world=self.world.state,
             balls_left=np.zeros(n_envs, dtype=np.int64),
@@ -136,6 +154,16 @@ class Game:
             warning_age=np.zeros(n_envs, dtype=np.int64),
             skill_left=np.zeros(n_envs, dtype=np.int64),
             lane_frames=np.zeros(n_envs, dtype=np.int64),
+            lights=np.zeros((n_envs, len(rule_set.lights)), dtype=bool),
+            counters=np.zeros((n_envs, len(rule_set.counters)), dtype=np.int64),
+            timers=np.zeros((n_envs, len(self.book.timer_frames)), dtype=np.int64),
+            bonus=np.zeros(n_envs, dtype=np.int64),
+            multiplier=np.ones(n_envs, dtype=np.int64),
+            save_frames=np.zeros(n_envs, dtype=np.int64),
+            rule_points=np.zeros(n_envs, dtype=np.int64),
+            rule_events=np.zeros((n_envs, n_rules + 2), dtype=np.int64),
+            lights_were_on=np.zeros((n_envs, n_rules), dtype=bool),
+            flippers_before=np.zeros((n_envs, n_flippers), dtype=bool),
         )
         # The buttons: the flippers', and the cabinet's on a table that has one.
         self.cabinet = table.has_cabinet
@@ -161,6 +189,13 @@ class Game:
                 f"{self.table.name!r}: every env of a game needs the same"
             )
         # The step loop reads the cabinet's numbers, the player's plunger's among them, once.
+        if (table.rules, table.ball_save) != (self.table.rules, self.table.ball_save) or (
+            table.rules is not None and table.element_names != self.table.element_names
+        ):
+            raise ValueError(
+                f"table {table.name!r} has other rules or ball save than {self.table.name!r}: "
+                "every env of a game needs the same"
+            )
         cabinet = (table.cabinet, table.tilt, table.plunger if table.has_cabinet else None)
         if cabinet != (self.table.cabinet, self.table.tilt, self.table.plunger if self.cabinet
                        else None):  # fmt: skip
@@ -234,6 +269,16 @@ class Game:
         state.points[env] = 0
         state.drained[env] = False
         state.frames[env] = 0
+        self.world.reset_targets(env)
+        if self.book.active:
+            rules = self.rule_set
+            state.lights[env] = [light.lit for light in rules.lights] if rules else []
+            for array in (state.counters, state.timers, state.bonus, state.rule_points,
+                          state.rule_events, state.lights_were_on):  # fmt: skip
+                array[env] = 0
+            state.multiplier[env] = 1
+            state.save_frames[env] = -1
+            state.flippers_before[env] = False
         if self.cabinet:
             self.world.state.cabinet[env] = 0.0
             self.world.state.tilted[env] = False
@@ -262,6 +307,8 @@ class Game:
         else:
             low, high = plunger.speed
             self.world.launch(env, float(rng.uniform(low, high)))
+        if self.state.save_frames[env] < 0:  # the ball save runs from the ball's first launch
+            self.state.save_frames[env] = self.book.save_frames
         self.state.on_plunger[env] = False
         self.state.plunger_pull[env] = 0.0
         self._moved(env)
@@ -398,6 +445,7 @@ class Game:
             radius=self.table.ball.radius,
             scores=self.world.tables.scores,
             **self._cabinet_rules(),
+            book=self.book,
         )
 
     def _cabinet_rules(self) -> dict[str, Any]:
@@ -452,6 +500,22 @@ class Game:
             "drained": state.drained.copy(),
             "frames": state.frames.copy(),
             **self._cabinet_infos(slice(None)),
+            **self._rule_infos(slice(None)),
+        }
+
+    def _rule_infos(self, envs: int | slice) -> dict[str, Any]:
+        """The rules' entries of the infos (none for a table without rules or ball save):
+        ``rule_events`` (the step's rules fired, ball saves and bonuses, counts in the order of
+        :attr:`event_names`), ``bonus``, ``bonus_multiplier`` and ``rule_score`` (points the rules
+        scored in this game: modes, awards and end-of-ball bonuses)."""
+        if not self.book.active:
+            return {}
+        state = self.state
+        return {
+            "rule_events": state.rule_events[envs].copy(),
+            "bonus": state.bonus[envs].copy(),
+            "bonus_multiplier": state.multiplier[envs].copy(),
+            "rule_score": state.rule_points[envs].copy(),
         }
 
     def _cabinet_infos(self, envs: int | slice) -> dict[str, Any]:
@@ -485,7 +549,19 @@ class Game:
                 key: value if isinstance(value, np.ndarray) else value.item()
                 for key, value in self._cabinet_infos(env).items()
             },
+            **self._rule_info(env),
         }
+
+    def _rule_info(self, env: int) -> dict[str, Any]:
+        """:meth:`_rule_infos` of one env, ``rule_events`` as name -> times this step."""
+        info = {key: value.item() for key, value in self._rule_infos(env).items()
+                if key != "rule_events"}  # fmt: skip
+        if info:
+            counts = self.state.rule_events[env]
+            info["rule_events"] = {
+                name: int(n) for name, n in zip(self.event_names, counts, strict=False) if n
+            }
+        return info
 
 
 def check_playable(table: Table) -> None:

@@ -37,8 +37,36 @@ FLIPPER_UP_SPEED = 7  # angular speed of the upstroke [rad/s] (> 0)
 FLIPPER_DOWN_SPEED = 8  # angular speed of the return [rad/s] (> 0)
 FLIPPER_SIZE = 9
 
+# Targets and their kin (tables with them; each array has 0 rows on a table without), after the
+# sensors in the element ids: drop targets, spinners, kickbacks (see ``physics.targets``).
+# Drop targets, array of shape (T, 4): x0, y0, x1, y1 [m], two-sided segments that stop the ball
+# while up (State.targets_up) and drop when hit; Geometry.drop_target_bank gives each its bank.
+# Spinners, array of shape (P, SPINNER_SIZE): a flap across a lane that the ball passes through.
+SPINNER_X0 = 0  # the flap's line across the lane [m]
+SPINNER_Y0 = 1
+SPINNER_X1 = 2
+SPINNER_Y1 = 3
+SPINNER_RADIUS = 4  # flap radius [m]: a ball crossing at normal speed v spins it at v / radius
+SPINNER_DAMPING = 5  # viscous decay of its spin [1/s]
+SPINNER_FRICTION = 6  # its bearing's constant deceleration [rad/s^2]
+SPINNER_SIZE = 7
+# A spinner's state, array of shape (n_envs, P, SPIN_STATE_SIZE), float64.
+SPIN_ANGLE = 0  # the flap's angle, wrapped to [0, 2 pi) [rad]
+SPIN_OMEGA = 1  # its angular velocity [rad/s]
+SPIN_STATE_SIZE = 2
+# Kickbacks, array of shape (K, KICKBACK_SIZE): a line across an outlane; a ball crossing it
+# against the kick while the kickback is lit (State.kickback_lit) leaves it at the kick velocity.
+KICKBACK_X0 = 0  # [m]
+KICKBACK_Y0 = 1
+KICKBACK_X1 = 2
+KICKBACK_Y1 = 3
+KICKBACK_VX = 4  # the velocity a lit kickback gives the ball [m/s]
+KICKBACK_VY = 5
+KICKBACK_SIZE = 6
+
 # Contact log, one row per contact, array of shape (n_envs, capacity, CONTACT_SIZE).
-# Element ids are global: segments first, then circles, flippers and sensors.
+# Element ids are global: segments first, then circles, flippers, sensors, drop targets, spinners
+# and kickbacks.
 CONTACT_ELEMENT = 0  # global element id (stored as float, exact for any realistic count)
 CONTACT_TIME = 1  # time of the contact since the start of the step [s]
 CONTACT_SPEED = 2  # normal approach speed relative to the surface before the response [m/s]

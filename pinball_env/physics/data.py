@@ -5,7 +5,8 @@ their shapes and dtypes (as MuJoCo MJX's ``make_data`` does).
 Every per-env array has the env as its first axis, so a single env is a batch of one and a vector
 env steps N with the same kernel. Column meanings are in :mod:`pinball_env.physics.columns`.
 
-Element ids are global and ordered: segments first, then circles, flippers and sensors, as
+Element ids are global and ordered: segments first, then circles, flippers, sensors, drop
+targets, spinners and kickbacks, as
 ``Table.pack`` lays the arrays out and ``Table.element_names`` names them. The ``first_*``
 functions give the offsets from the arrays; the kernel and the backends use them.
 They are inlined into their callers (``inline="always"``): a compiled call that receives the
@@ -19,7 +20,12 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from pinball_env.physics.columns import BALL_STATE_SIZE, CABINET_STATE_SIZE, CONTACT_SIZE
+from pinball_env.physics.columns import (
+    BALL_STATE_SIZE,
+    CABINET_STATE_SIZE,
+    CONTACT_SIZE,
+    SPIN_STATE_SIZE,
+)
 
 # Contacts logged per env and frame; more are counted but not logged. A frame of a ball rattling
 # in a corner makes a few dozen; the cap bounds memory, not physics.
@@ -50,6 +56,14 @@ class Geometry(NamedTuple):
     # (0, CABINET_SIZE) for a table without a cabinet: then nothing moves it, and the ball feels
     # gravity alone.
     cabinet: np.ndarray
+    # Targets and their kin (see ``physics.targets``), each with 0 rows on a table without.
+    drop_targets: np.ndarray  # (T, 4) float64: x0, y0, x1, y1 [m], two-sided while up
+    drop_target_bounds: np.ndarray  # (T, 3): bounding circles (segment_bounds)
+    drop_target_props: np.ndarray  # (T, PROP_SIZE) float64 (kick 0)
+    drop_target_bank: np.ndarray  # (T,) int64: the bank each belongs to
+    bank_reset: np.ndarray  # (B,) float64: a bank rises this long after its last target fell [s]
+    spinners: np.ndarray  # (P, SPINNER_SIZE) float64
+    kickbacks: np.ndarray  # (K, KICKBACK_SIZE) float64
 
 
 class Settings(NamedTuple):
@@ -81,6 +95,10 @@ class State(NamedTuple):
     hits: np.ndarray  # (N, E) int64: hits of the frame per element id (scoring events)
     cabinet: np.ndarray  # (N, CABINET_STATE_SIZE) float64: the cabinet and its plumb bob
     tilted: np.ndarray  # (N,) bool, input: the machine is tilted (kickers dead)
+    targets_up: np.ndarray  # (N, T) bool: the drop target stands (and stops the ball)
+    bank_clock: np.ndarray  # (N, B) float64: time since the bank's last target fell [s]
+    spinners: np.ndarray  # (N, P, SPIN_STATE_SIZE) float64: each spinner's angle and spin
+    kickback_lit: np.ndarray  # (N, K) bool: the kickback fires at the next ball over it
 
 
 class Scratch(NamedTuple):
@@ -117,9 +135,27 @@ def first_sensor(geometry):
 
 
 @njit(cache=True, inline="always")
-def element_count(geometry):
-    """Number of elements, solid and sensors."""
+def first_drop_target(geometry):
+    """Element id of the first drop target (after the sensors)."""
     return first_sensor(geometry) + geometry.sensors.shape[0]
+
+
+@njit(cache=True, inline="always")
+def first_spinner(geometry):
+    """Element id of the first spinner."""
+    return first_drop_target(geometry) + geometry.drop_targets.shape[0]
+
+
+@njit(cache=True, inline="always")
+def first_kickback(geometry):
+    """Element id of the first kickback."""
+    return first_spinner(geometry) + geometry.spinners.shape[0]
+
+
+@njit(cache=True, inline="always")
+def element_count(geometry):
+    """Number of elements of every kind."""
+    return first_kickback(geometry) + geometry.kickbacks.shape[0]
 
 
 def grid_layout(n_elements: int, width: float, height: float, radius: float) -> tuple:
@@ -172,7 +208,8 @@ def segment_bounds(segments: np.ndarray) -> np.ndarray:
 
 def make_state(geometry: Geometry, n_envs: int, contact_capacity: int = CONTACT_CAPACITY) -> State:
     """A zeroed :class:`State` for ``n_envs`` envs on ``geometry``: no ball in play, flippers at
-    angle 0 and released (``World`` then puts them at rest)."""
+    angle 0 and released (``World`` then puts them at rest), drop targets up, spinners still,
+    kickbacks dark."""
     if n_envs < 1:
         raise ValueError(f"n_envs must be >= 1, got {n_envs}")
     n_flippers = geometry.flippers.shape[0]
@@ -187,6 +224,10 @@ def make_state(geometry: Geometry, n_envs: int, contact_capacity: int = CONTACT_
         hits=np.zeros((n_envs, element_count(geometry)), dtype=np.int64),
         cabinet=np.zeros((n_envs, CABINET_STATE_SIZE)),
         tilted=np.zeros(n_envs, dtype=np.bool_),
+        targets_up=np.ones((n_envs, geometry.drop_targets.shape[0]), dtype=np.bool_),
+        bank_clock=np.zeros((n_envs, geometry.bank_reset.shape[0])),
+        spinners=np.zeros((n_envs, geometry.spinners.shape[0], SPIN_STATE_SIZE)),
+        kickback_lit=np.zeros((n_envs, geometry.kickbacks.shape[0]), dtype=np.bool_),
     )
 
 

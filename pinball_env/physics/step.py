@@ -55,11 +55,19 @@ from pinball_env.physics.columns import (
     FLIPPER_TIP_RADIUS,
     FLIPPER_UP_ANGLE,
     FLIPPER_UP_SPEED,
+    KICKBACK_VX,
+    KICKBACK_VY,
     PROP_FRICTION,
     PROP_KICK,
     PROP_RESTITUTION,
 )
-from pinball_env.physics.data import first_circle, first_flipper, first_sensor
+from pinball_env.physics.data import (
+    first_circle,
+    first_drop_target,
+    first_flipper,
+    first_kickback,
+    first_sensor,
+)
 from pinball_env.physics.flipper import flipper_distance, flipper_reach, sweep_flipper
 from pinball_env.physics.sweep import (
     INF,
@@ -68,6 +76,7 @@ from pinball_env.physics.sweep import (
     sweep_circle,
     sweep_segment,
 )
+from pinball_env.physics.targets import spin_spinner, update_targets
 
 # For a solid sphere, the share of the contact-point slip one friction impulse can remove:
 # 1 / (1 + m r^2 / I) with I = 2/5 m r^2. The remaining 5/7 goes into spin.
@@ -145,12 +154,14 @@ def log_contact(state, env, element, time, speed):
 
 @njit(cache=True)
 def element_props(element, geometry):
-    """Surface properties row of a solid element."""
+    """Surface properties row of a solid element (drop targets included)."""
     j = element - first_circle(geometry)
     if j < 0:
         return geometry.segment_props[element]
     if j < geometry.circles.shape[0]:
         return geometry.circle_props[j]
+    if element >= first_drop_target(geometry):
+        return geometry.drop_target_props[element - first_drop_target(geometry)]
     return geometry.flipper_props[element - first_flipper(geometry)]
 
 
@@ -158,10 +169,14 @@ def element_props(element, geometry):
 def separation(x, y, element, geometry, angles):
     """Distance from the point (x, y) to the surface of a solid element (negative inside) and
     the unit normal from the surface towards the point (zero where it is undefined), the
-    flippers at ``angles``."""
+    flippers at ``angles`` (a drop target as if it stood)."""
     j = element - first_circle(geometry)
-    if j < 0:
-        s = geometry.segments[element]
+    if j < 0 or element >= first_drop_target(geometry):
+        s = (
+            geometry.segments[element]
+            if j < 0
+            else geometry.drop_targets[element - first_drop_target(geometry)]
+        )
         gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
         d = norm(gx, gy)
         return (d, gx / d, gy / d) if d > 0.0 else (d, 0.0, 0.0)
@@ -408,6 +423,38 @@ def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossi
     return drain
 
 
+@njit(cache=True)
+def kickback_crossing(x, y, vx, vy, duration, kickbacks, lit):
+    """The first lit kickback whose line the ball moving at (vx, vy) from (x, y) for
+    ``duration`` seconds crosses against its kick, and the fraction of the move where:
+    ``(kickback, fraction)``, ``(-1, inf)`` for none."""
+    best, best_u = -1, INF
+    for j in range(kickbacks.shape[0]):
+        kick = kickbacks[j]
+        if lit[j] and vx * kick[KICKBACK_VX] + vy * kick[KICKBACK_VY] < 0.0:
+            u = sensor_crossing(x, y, vx * duration, vy * duration, kick)
+            if u < best_u:
+                best, best_u = j, u
+    return best, best_u
+
+
+@njit(cache=True)
+def count_kickbacks(state, env, x, y, vx, vy, duration, kickbacks, lit, kickback_id, time):
+    """Count (as hits) and log the dark kickbacks' lines that the move from (x, y) at (vx, vy)
+    for ``duration`` seconds crossed against their kick; ``time`` is the move's end [s into the
+    frame]. (A lit one crossed fires, see ``step_ball``.)"""
+    for j in range(kickbacks.shape[0]):
+        kick = kickbacks[j]
+        against = vx * kick[KICKBACK_VX] + vy * kick[KICKBACK_VY] < 0.0
+        if (
+            not lit[j]
+            and against
+            and sensor_crossing(x, y, vx * duration, vy * duration, kick) < INF
+        ):
+            state.hits[env, kickback_id + j] += 1
+            log_contact(state, env, kickback_id + j, time, 0.0)
+
+
 # --- one ball ------------------------------------------------------------------------------------
 
 
@@ -449,32 +496,44 @@ def release_wedge(x, y, r, flippers, omegas, stops, held_time, pushers, held):
 
 
 @njit(cache=True)
-def deepest_overlap(x, y, geometry, angles, r):
-    """How deep a ball of radius ``r`` at (x, y) lies in the two-sided wall, post or flipper
-    (at ``angles``) it overlaps most [m]; 0 or less when it overlaps none."""
+def deepest_overlap(x, y, geometry, angles, up, r):
+    """How deep a ball of radius ``r`` at (x, y) lies in the two-sided wall, post, flipper (at
+    ``angles``) or standing drop target (``up``: the env's row of ``State.targets_up``) it
+    overlaps most [m]; 0 or less when it overlaps none."""
     deepest = -INF
     for element in range(first_sensor(geometry)):  # the solids
         if element < geometry.segments.shape[0] and geometry.segment_one_sided[element]:
             continue  # a ball may lie partly through a gate
         d, _, _ = separation(x, y, element, geometry, angles)
         deepest = max(deepest, r - d)
+    target_id = first_drop_target(geometry)
+    for j in range(geometry.drop_targets.shape[0]):
+        if up[j]:
+            d, _, _ = separation(x, y, target_id + j, geometry, angles)
+            deepest = max(deepest, r - d)
     return deepest
 
 
 @njit(cache=True)
-def settle(x, y, geometry, angles, r, skin):
-    """Push the ball out of every two-sided wall, post and flipper (at ``angles``) that it
-    overlaps, in rounds until it overlaps none by more than half the skin or SETTLE_ROUNDS
-    have passed (projected Gauss-Seidel): a wedged ball among three or more surfaces, which
-    :func:`unwedge` (two at a time) cannot clear. Where the surfaces leave no room for the
-    ball near where it is, it stays inside one of them (the caller then undoes the substep)."""
+def settle(x, y, geometry, angles, up, r, skin):
+    """Push the ball out of every two-sided wall, post, flipper (at ``angles``) and standing
+    drop target (``up``) that it overlaps, in rounds until it overlaps none by more than half
+    the skin or SETTLE_ROUNDS have passed (projected Gauss-Seidel): a wedged ball among three
+    or more surfaces, which :func:`unwedge` (two at a time) cannot clear. Where the surfaces
+    leave no room for the ball near where it is, it stays inside one of them (the caller then
+    undoes the substep)."""
     target = r + skin
     x0, y0 = x, y
     for _ in range(SETTLE_ROUNDS):
         moved = False
-        for element in range(first_sensor(geometry)):  # the solids
+        target_id = first_drop_target(geometry)
+        for element in range(target_id + geometry.drop_targets.shape[0]):  # the solids
             if element < geometry.segments.shape[0] and geometry.segment_one_sided[element]:
                 continue
+            if element >= first_sensor(geometry) and (
+                element < target_id or not up[element - target_id]
+            ):
+                continue  # a sensor, or a target that has dropped
             d, nx, ny = separation(x, y, element, geometry, angles)
             if d < target - 0.5 * skin and (nx != 0.0 or ny != 0.0):
                 x += nx * (target - d)
@@ -525,6 +584,16 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     if has_cabinet:
         cabinet_frame(state.cabinet[env], geometry.cabinet[0], h, cabinet_dv)
     kick_scale = 0.0 if state.tilted[env] else 1.0
+    # Targets and their kin, on a table with them (``physics.targets``).
+    drop_targets, drop_bounds = geometry.drop_targets, geometry.drop_target_bounds
+    spinners, kickbacks = geometry.spinners, geometry.kickbacks
+    n_targets, n_spinners, n_kickbacks = (
+        drop_targets.shape[0],
+        spinners.shape[0],
+        kickbacks.shape[0],
+    )
+    target_id, kickback_id = first_drop_target(geometry), first_kickback(geometry)
+    up, spins, lit = state.targets_up[env], state.spinners[env], state.kickback_lit[env]
     ball = state.balls[env]
     x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
     for k in range(settings.substeps):
@@ -576,7 +645,33 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                         t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
                         element = flipper_id + flipper
                         cut = fnx == 0.0 and fny == 0.0  # the sweep ran out of slices
+                if n_targets > 0:  # the standing drop targets (ties go to lower ids)
+                    dx, dy = vx * remaining, vy * remaining
+                    travel = math.sqrt(dx * dx + dy * dy)
+                    for j in range(n_targets):
+                        if not up[j]:
+                            continue
+                        d = drop_targets[j]
+                        b = drop_bounds[j]
+                        tt, tnx, tny = segment_contact(
+                            x, y, dx, dy, r, travel, d[0], d[1], d[2], d[3], b[0], b[1], b[2],
+                            False,
+                        )  # fmt: skip
+                        if tt < t:
+                            t, nx, ny, svx, svy = tt, tnx, tny, 0.0, 0.0
+                            element, cut = target_id + j, False
                 used = remaining * min(t, 1.0)
+                # A lit kickback's line crossed on the way: the ball goes there, and on at the
+                # kick velocity (the kick, not the contact, ends this pass).
+                kicked = -1
+                if n_kickbacks > 0:
+                    kicked, u = kickback_crossing(x, y, vx, vy, used, kickbacks, lit)
+                    if kicked >= 0:
+                        used *= u
+                if n_spinners > 0:
+                    for j in range(n_spinners):
+                        if sensor_crossing(x, y, vx * used, vy * used, spinners[j]) < INF:
+                            spin_spinner(spinners[j], spins[j], vx, vy)
                 # Sensor crossings on the way to the contact (or to the end of the substep),
                 # after a cheap test that rules out the common case.
                 crossed = False
@@ -597,6 +692,16 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 x += vx * used
                 y += vy * used
                 remaining -= used
+                if n_kickbacks > 0:
+                    count_kickbacks(state, env, x - vx * used, y - vy * used, vx, vy, used,
+                                    kickbacks, lit, kickback_id, k * h + h - remaining)  # fmt: skip
+                if kicked >= 0:
+                    state.hits[env, kickback_id + kicked] += 1
+                    log_contact(state, env, kickback_id + kicked, k * h + h - remaining, 0.0)
+                    vx, vy = kickbacks[kicked, KICKBACK_VX], kickbacks[kicked, KICKBACK_VY]
+                    spin = 0.0
+                    lit[kicked] = False
+                    continue
                 if element < 0 or cut:  # a cut drops the rest of the substep, as a wedge does
                     break
                 props = element_props(element, geometry)
@@ -662,9 +767,9 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     angles[j], _ = flipper_end(
                         angle[env, j], targets[j], omegas[j], stops[j], held[j], held_time, h
                     )
-                if deepest_overlap(x, y, geometry, angles, r) > settings.skin:
-                    x, y = settle(x, y, geometry, angles, r, settings.skin)
-                if deepest_overlap(x, y, geometry, angles, r) > settings.skin:
+                if deepest_overlap(x, y, geometry, angles, up, r) > settings.skin:
+                    x, y = settle(x, y, geometry, angles, up, r, settings.skin)
+                if deepest_overlap(x, y, geometry, angles, up, r) > settings.skin:
                     x, y, vx, vy, spin = x0, y0, 0.0, 0.0, 0.0
                     for j in range(n_flippers):
                         if omegas[j] != 0.0 and within_reach(x, y, r, flippers[j]):
@@ -673,6 +778,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             if not pinched:
                 for n in range(n_hits):
                     state.hits[env, hit_elements[n]] += 1
+                    if target_id <= hit_elements[n] < target_id + n_targets:
+                        up[hit_elements[n] - target_id] = False  # the target drops
         # Commit the flippers' angles at the end of the substep.
         for j in range(n_flippers):
             angle[env, j], omega[env, j] = flipper_end(
@@ -680,6 +787,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             )
     ball[BALL_X], ball[BALL_Y] = x, y
     ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
+    if n_targets + n_spinners > 0:
+        update_targets(geometry, state, env, x, y, r, settings.dt)
     return math.isfinite(x + y + vx + vy + spin)
 
 

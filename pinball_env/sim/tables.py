@@ -95,14 +95,17 @@ class EnvTables:
             return (self.geometry,), (self.settings,)
         return self._geometries, self._settings
 
-    def set(self, env: int, table: Table) -> tuple[int, int, int]:
+    def set(self, env: int, table: Table) -> tuple[int, int, int, tuple[int, ...]]:
         """Make ``table`` env ``env``'s. Returns the element count, sensor count and passes its
-        packed arrays need, for the World to widen the per-element rows of its state."""
+        packed arrays need, and its numbers of drop targets, banks, spinners and kickbacks, for
+        the World to widen the per-element rows of its state."""
         if self._tables is None:
             self._tables = [self.first] * self.n_envs
             self._pack_all()
         geometry, settings = self._pack(table)
-        needs = (element_count(geometry), geometry.sensors.shape[0], settings.max_passes)
+        targets = tuple(len(a) for a in (geometry.drop_targets, geometry.bank_reset,
+                                         geometry.spinners, geometry.kickbacks))  # fmt: skip
+        needs = (element_count(geometry), geometry.sensors.shape[0], settings.max_passes, targets)
         if self.scores.shape[1] < needs[0]:
             wider = np.zeros((self.n_envs, needs[0]), dtype=np.int64)
             wider[:, : self.scores.shape[1]] = self.scores

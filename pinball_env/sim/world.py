@@ -174,6 +174,16 @@ class World:
         self.state.flipper_omega[env] = 0.0
         self.state.flipper_command[env] = False
 
+    def reset_targets(self, env: int) -> None:
+        """Env ``env``'s targets as a game starts: drop targets up, spinners still, kickbacks lit
+        as the table says."""
+        state, table = self.state, self.table_of(env)
+        state.targets_up[env] = True
+        state.bank_clock[env] = 0.0
+        state.spinners[env] = 0.0
+        state.kickback_lit[env] = False
+        state.kickback_lit[env, : len(table.kickbacks)] = [k.lit for k in table.kickbacks]
+
     # --- a table per env ----------------------------------------------------------------------
 
     def table_of(self, env: int) -> Table:
@@ -192,22 +202,31 @@ class World:
         if not self.tables.varied:
             self._entry = None  # the kernel now takes a table per env
         self._fit(*self.tables.set(env, table))
+        self.reset_targets(env)
         self.rest_flippers(env)
         self.place_ball(env, table.ball.start, table.ball.velocity)
 
-    def _fit(self, n_elements: int, n_sensors: int, max_passes: int) -> None:
+    def _fit(self, n_elements: int, n_sensors: int, max_passes: int, targets: tuple) -> None:
         """Widen the per-element rows of the state and scratch arrays (zero-padded) to hold a
-        table of ``n_elements`` elements, ``n_sensors`` sensors and ``max_passes`` passes. The
-        arrays are replaced, so holders of ``state`` must take the new one (``Game`` does)."""
+        table of ``n_elements`` elements, ``n_sensors`` sensors, ``max_passes`` passes and
+        ``targets`` (drop targets, banks, spinners, kickbacks). The arrays are replaced, so
+        holders of ``state`` must take the new one (``Game`` does)."""
 
         def widen(array: np.ndarray, width: int) -> np.ndarray:
             if array.shape[1] >= width:
                 return array
-            wider = np.zeros((array.shape[0], width), dtype=array.dtype)
+            wider = np.zeros((array.shape[0], width, *array.shape[2:]), dtype=array.dtype)
             wider[:, : array.shape[1]] = array
             return wider
 
-        self.state = self.state._replace(hits=widen(self.state.hits, n_elements))
+        n_targets, n_banks, n_spinners, n_kickbacks = targets
+        self.state = self.state._replace(
+            hits=widen(self.state.hits, n_elements),
+            targets_up=widen(self.state.targets_up, n_targets),
+            bank_clock=widen(self.state.bank_clock, n_banks),
+            spinners=widen(self.state.spinners, n_spinners),
+            kickback_lit=widen(self.state.kickback_lit, n_kickbacks),
+        )
         self.scratch = self.scratch._replace(
             crossings=widen(self.scratch.crossings, n_sensors),
             hit_elements=widen(self.scratch.hit_elements, max_passes),

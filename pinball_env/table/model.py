@@ -31,6 +31,7 @@ from pinball_env.physics import (
     segment_bounds,
 )
 from pinball_env.table.reachable import CELL, free_space, touches
+from pinball_env.table.rules import RuleSet
 
 # The flipper buttons, in the order of the columns of a buttons array (and of the bits of a
 # discrete action, see ``pinball_env.game``).
@@ -141,6 +142,94 @@ class Sensor:
     def segment(self) -> tuple[float, float, float, float]:
         """The line as (x0, y0, x1, y1) [m]."""
         return (*self.points[0], *self.points[1])
+
+
+@dataclass(frozen=True)
+class StandupTarget:
+    """A scoring face that stays: a two-sided segment that counts every hit."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # its two ends [m]
+    material: str
+    score: int = 0  # points per hit [-]
+
+    @property
+    def segment(self) -> tuple[float, float, float, float]:
+        return (*self.points[0], *self.points[1])
+
+    def as_wall(self) -> Wall:
+        return Wall(self.name, self.points, self.material)
+
+
+@dataclass(frozen=True)
+class DropTarget:
+    """One target of a bank: a two-sided segment that stops the ball while up and drops when
+    hit (see ``physics.targets``)."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # its two ends [m]
+    score: int = 0  # points per hit (the hit that drops it) [-]
+
+    @property
+    def segment(self) -> tuple[float, float, float, float]:
+        return (*self.points[0], *self.points[1])
+
+
+@dataclass(frozen=True)
+class DropBank:
+    """A bank of drop targets: once all are down it rises again ``reset_time`` later (never
+    onto the ball: it waits for the ball to leave)."""
+
+    name: str
+    material: str  # of its targets' faces [-]
+    targets: tuple[DropTarget, ...]
+    reset_time: float = 1.0  # [s] after the last target fell
+
+    def walls(self) -> tuple[Wall, ...]:
+        """Its targets as walls (all standing), for the checks of a table's geometry."""
+        return tuple(Wall(t.name, t.points, self.material) for t in self.targets)
+
+
+@dataclass(frozen=True)
+class Spinner:
+    """A flap across a lane that the ball passes through, spinning it (``physics.targets``);
+    each revolution is a hit."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # the flap's line across the lane [m]
+    radius: float = 0.015  # flap radius [m]: a ball at normal speed v spins it at v / radius
+    damping: float = 0.5  # viscous decay of the spin [1/s]
+    friction: float = 20.0  # the bearing's constant deceleration [rad/s^2]
+    score: int = 0  # points per revolution [-]
+
+    @property
+    def segment(self) -> tuple[float, float, float, float]:
+        return (*self.points[0], *self.points[1])
+
+
+@dataclass(frozen=True)
+class Kickback:
+    """A kicker at the bottom of an outlane: a ball crossing its line against ``kick`` is a hit,
+    and while the kickback is lit (the rules light it) the ball leaves at ``kick`` and the
+    kickback goes dark."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # its line across the outlane [m]
+    kick: tuple[float, float]  # the velocity it gives the ball [m/s]
+    lit: bool = False  # lit at the start of a game [-]
+    score: int = 0  # points per hit [-]
+
+    @property
+    def segment(self) -> tuple[float, float, float, float]:
+        return (*self.points[0], *self.points[1])
+
+
+@dataclass(frozen=True)
+class BallSave:
+    """A ball that drains within ``time`` of leaving the plunger is served again, once per
+    ball, without losing it."""
+
+    time: float  # [s]
 
 
 @dataclass(frozen=True)
@@ -256,6 +345,13 @@ class Table:
     plunger: Plunger | None = None  # None: the ball is only ever placed at ball.start
     cabinet: Cabinet | None = None  # with tilt and a manual plunger: the whole cabinet
     tilt: Tilt | None = None
+    # Targets and rules (see ``physics.targets`` and ``table.rules``).
+    standup_targets: tuple[StandupTarget, ...] = ()
+    drop_targets: tuple[DropBank, ...] = ()
+    spinners: tuple[Spinner, ...] = ()
+    kickbacks: tuple[Kickback, ...] = ()
+    ball_save: BallSave | None = None
+    rules: RuleSet | None = None
     slope_deg: float = 6.5  # inclination of the playfield [deg]
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
@@ -283,6 +379,23 @@ class Table:
         return bool(touches(self.free_space, drains, 2.5 * CELL, CELL))
 
     @property
+    def solid_walls(self) -> tuple[Wall, ...]:
+        """The walls, stand-up targets and drop targets (standing) as walls: everything a ball
+        can meet along a segment."""
+        targets = tuple(t.as_wall() for t in self.standup_targets)
+        return self.walls + targets + tuple(w for bank in self.drop_targets for w in bank.walls())
+
+    @property
+    def drop_target_list(self) -> tuple[DropTarget, ...]:
+        """Every bank's targets, in element-id order."""
+        return tuple(t for bank in self.drop_targets for t in bank.targets)
+
+    @property
+    def has_targets(self) -> bool:
+        """Whether the table has drop targets, spinners or kickbacks (per-env element state)."""
+        return bool(self.drop_targets or self.spinners or self.kickbacks)
+
+    @property
     def outline(self) -> Wall | None:
         """The closed wall enclosing the largest area, which keeps the ball in; None if none."""
         return enclosure(self.walls)
@@ -301,17 +414,25 @@ class Table:
 
     @cached_property
     def element_names(self) -> tuple[str, ...]:
-        """Name of every element by global id: segments (``"wall[i]"``), circles, flippers and
-        sensors."""
+        """Name of every element by global id: segments (``"wall[i]"``, then the stand-up
+        targets), circles, flippers, sensors, drop targets, spinners and kickbacks."""
         segments = [f"{wall.name}[{i}]" for wall in self.walls for i in range(len(wall.segments()))]
-        return (*segments, *(e.name for e in (*self.posts, *self.flippers, *self.sensors)))
+        return (*segments, *(e.name for e in self._named_elements))
 
     @cached_property
     def element_scores(self) -> np.ndarray:
         """Points per hit of every element by global id, (E,) int64, read-only."""
         segments = [wall.score for wall in self.walls for _ in wall.segments()]
-        others = [e.score for e in (*self.posts, *self.flippers, *self.sensors)]
+        others = [e.score for e in self._named_elements]
         return _frozen_array(segments + others, np.int64, (-1,))
+
+    @property
+    def _named_elements(self) -> tuple[Any, ...]:
+        """The elements after the walls' segments, in id order."""
+        return (
+            *self.standup_targets, *self.posts, *self.flippers, *self.sensors,
+            *self.drop_target_list, *self.spinners, *self.kickbacks,
+        )  # fmt: skip
 
     @property
     def flipper_buttons(self) -> tuple[int, ...]:
@@ -326,6 +447,10 @@ class Table:
                 segments.append(segment)
                 segment_props.append(self._props(wall.material, wall.kick))
                 one_sided.append(wall.one_sided)
+        for target in self.standup_targets:
+            segments.append(target.segment)
+            segment_props.append(self._props(target.material, 0.0))
+            one_sided.append(False)
         segments = _frozen_array(segments, np.float64, (-1, 4))
         props = (-1, columns.PROP_SIZE)
         circles = [(*post.center, post.radius) for post in self.posts]
@@ -347,6 +472,27 @@ class Table:
                 build_grid(segments, circles, *self._grid_layout()), np.int64, (-1,)
             ),
             cabinet=_frozen_array(self._cabinet_row(), np.float64, (-1, columns.CABINET_SIZE)),
+            **self._pack_targets(),
+        )
+
+    def _pack_targets(self) -> dict[str, np.ndarray]:
+        """The drop targets', spinners' and kickbacks' arrays of ``Geometry``."""
+        targets = [t.segment for t in self.drop_target_list]
+        props = [self._props(bank.material, 0.0) for bank in self.drop_targets
+                 for _ in bank.targets]  # fmt: skip
+        banks = [b for b, bank in enumerate(self.drop_targets) for _ in bank.targets]
+        spinners = [
+            [*s.segment, s.radius, s.damping, s.friction] for s in self.spinners
+        ]  # columns SPINNER_*
+        kickbacks = [[*k.segment, *k.kick] for k in self.kickbacks]  # columns KICKBACK_*
+        return dict(
+            drop_targets=_frozen_array(targets, np.float64, (-1, 4)),
+            drop_target_bounds=_frozen_array(segment_bounds(targets), np.float64, (-1, 3)),
+            drop_target_props=_frozen_array(props, np.float64, (-1, columns.PROP_SIZE)),
+            drop_target_bank=_frozen_array(banks, np.int64, (-1,)),
+            bank_reset=_frozen_array([b.reset_time for b in self.drop_targets], np.float64, (-1,)),
+            spinners=_frozen_array(spinners, np.float64, (-1, columns.SPINNER_SIZE)),
+            kickbacks=_frozen_array(kickbacks, np.float64, (-1, columns.KICKBACK_SIZE)),
         )
 
     @property
@@ -372,6 +518,7 @@ class Table:
 
     def _grid_layout(self) -> tuple[float, int, int]:
         n_elements = sum(len(wall.segments()) for wall in self.walls) + len(self.posts)
+        n_elements += len(self.standup_targets)
         return grid_layout(n_elements, self.width, self.height, self.ball.radius)
 
     def pack_settings(self) -> Settings:

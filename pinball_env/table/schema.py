@@ -28,14 +28,20 @@ from pinball_env.physics import flipper_distance, flipper_reach, point_segment_d
 from pinball_env.table.model import (
     BUTTONS,
     Ball,
+    BallSave,
     Cabinet,
+    DropBank,
+    DropTarget,
     Flipper,
+    Kickback,
     Material,
     Plunger,
     Post,
     Sensor,
     Simulation,
     SkillShot,
+    Spinner,
+    StandupTarget,
     Table,
     Tilt,
     Wall,
@@ -43,6 +49,18 @@ from pinball_env.table.model import (
     inside,
 )
 from pinball_env.table.reachable import cell_of
+from pinball_env.table.rules import (
+    EFFECTS,
+    FLIPPER_BUTTONS,
+    TRIGGERS,
+    Effect,
+    Light,
+    Rule,
+    RuleSet,
+    Timer,
+    Trigger,
+    find_cycle,
+)
 
 # Fastest ball a table or a reset may set [m/s]: a real one rarely passes 10 m/s, and the flipper
 # contact's work grows with the speed.
@@ -323,14 +341,18 @@ def _elements(
         "flippers": _group(raw, top, "flippers", partial(_flipper, point=point), MAX_FLIPPERS),
         "sensors": _group(raw, top, "sensors", partial(_sensor, point=point), MAX_SENSORS),
     }
+    elements.update(_target_groups(raw, top, point))
     n_segments = sum(len(wall.segments()) for wall in elements["walls"])
+    n_segments += len(elements["standup_targets"])
     if n_segments > MAX_SEGMENTS:
         top.key("walls").fail(f"{n_segments} segments in all, at most {MAX_SEGMENTS} allowed")
-    _check_elements(elements, materials, top)
+    targets = [t for bank in elements["drop_targets"] for t in bank.targets]
+    _check_elements({**elements, "drop_targets.targets": tuple(targets)}, materials, top)
     _check_kickers(elements, materials, top)
     _check_outline(elements["walls"], top)
-    _check_pivots(elements["flippers"], elements["walls"], top)
-    _check_swings(elements, top)
+    solid = {**elements, "walls": _solid_walls(elements)}
+    _check_pivots(elements["flippers"], solid["walls"], top)
+    _check_swings(solid, top)
     return elements
 
 
@@ -375,6 +397,10 @@ def _options(
         gravity = options.get("gravity", Table.gravity)
         options["tilt"] = _tilt(raw["tilt"], top.key("tilt"), substep, gravity)
     _check_whole_cabinet(options, elements["sensors"], top)
+    if "ball_save" in raw:
+        options["ball_save"] = _ball_save(raw["ball_save"], top.key("ball_save"))
+    if "rules" in raw:
+        options["rules"] = _rules(raw["rules"], top.key("rules"), point, rule_names(elements))
     return options
 
 
@@ -395,6 +421,14 @@ def table_to_dict(table: Table) -> dict[str, Any]:
     }
     for group in ("walls", "posts", "flippers", "sensors"):
         data[group] = [plain(element) for element in getattr(table, group)]
+    # Targets and rules only where the table has them (older tables write as they did).
+    for group in ("standup_targets", "drop_targets", "spinners", "kickbacks"):
+        if getattr(table, group):
+            data[group] = [plain(element) for element in getattr(table, group)]
+    if table.ball_save is not None:
+        data["ball_save"] = plain(table.ball_save)
+    if table.rules is not None:
+        data["rules"] = _rules_to_dict(table.rules)
     if table.plunger is not None:
         # The player's plunger's fields only where set: a machine's plunger writes as it always
         # did (digests of tables, such as a recording's, stay the same).
@@ -426,9 +460,9 @@ def _check_placed(
     loc: _Loc,
 ) -> None:
     """A ball of ``radius`` at ``center`` is clear of every element and inside the outline."""
-    walls = elements["walls"]
+    walls = _solid_walls(elements)
     _check_clear(center, radius, walls, elements["posts"], elements["flippers"], loc)
-    _check_enclosed(center, walls, loc)
+    _check_enclosed(center, elements["walls"], loc)
 
 
 # Keys of the top-level mapping; ``playfield`` holds Table.width and Table.height.
@@ -446,6 +480,12 @@ _TOP_KEYS = (
     "plunger",
     "cabinet",
     "tilt",
+    "standup_targets",
+    "drop_targets",
+    "spinners",
+    "kickbacks",
+    "ball_save",
+    "rules",
     "simulation",
 )
 
@@ -849,7 +889,7 @@ def check_ball_state(
     Errors name ``source``, e.g. ``reset options: ball_position: ...``."""
     where = _Loc(source)
     point = _point(position, where.key("ball_position"), table.width, table.height)
-    elements = {"walls": table.walls, "posts": table.posts, "flippers": table.flippers}
+    elements = {"walls": table.solid_walls, "posts": table.posts, "flippers": table.flippers}
     _check_placed(point, table.ball.radius, elements, where.key("ball_position"))
     if not table.free_space[cell_of(point, table.free_space.shape)]:
         where.key("ball_position").fail(
@@ -884,3 +924,317 @@ def _check_launch_path(plunger: Plunger, walls: tuple[Wall, ...], top: _Loc) -> 
 
 def _segment_distance(p: tuple[float, float], segment: tuple[float, float, float, float]) -> float:
     return float(point_segment_distance(p[0], p[1], *segment))
+
+
+# --- targets and rules ---------------------------------------------------------------------------
+
+MAX_DROP_TARGETS = 64  # over all banks
+MAX_SPINNERS = 16
+MAX_KICKBACKS = 8
+MAX_RULES = 256  # and as many lights, counters, timers
+MAX_MULTIPLIER = 100
+
+
+def _two_points(value: object, loc: _Loc, point: Parser) -> tuple[tuple[float, float], ...]:
+    points = _points(value, loc, point, 2, 2)
+    _check_lengths([(*points[0], *points[1])], loc)
+    return points
+
+
+def _standup(value: object, loc: _Loc, point: Parser) -> StandupTarget:
+    parsers = {
+        "name": _string,
+        "points": partial(_two_points, point=point),
+        "material": _string,
+        "score": _score,
+    }
+    return _record(StandupTarget, value, loc, parsers)
+
+
+def _drop_bank(value: object, loc: _Loc, point: Parser) -> DropBank:
+    target_parsers = {"name": _string, "points": partial(_two_points, point=point), "score": _score}
+
+    def targets(items: object, where: _Loc) -> tuple[DropTarget, ...]:
+        items = _list(items, where, 1, MAX_DROP_TARGETS)
+        return tuple(
+            _record(DropTarget, item, where.index(i, _name_of(item)), target_parsers)
+            for i, item in enumerate(items)
+        )
+
+    parsers = {
+        "name": _string,
+        "material": _string,
+        "targets": targets,
+        # [s]: at least a few frames, so that the rules see the bank down before it rises
+        "reset_time": partial(_number, low=0.1, high=60.0),
+    }
+    return _record(DropBank, value, loc, parsers)
+
+
+def _spinner(value: object, loc: _Loc, point: Parser) -> Spinner:
+    parsers = {
+        "name": _string,
+        "points": partial(_two_points, point=point),
+        "radius": partial(_number, low=0.002, high=0.1),  # [m]: a real flap is ~15 mm
+        "damping": partial(_number, low=0.0, high=50.0),  # [1/s]
+        "friction": partial(_number, low=0.0, high=1000.0),  # [rad/s^2]
+        "score": _score,
+    }
+    return _record(Spinner, value, loc, parsers)
+
+
+def _kickback(value: object, loc: _Loc, point: Parser) -> Kickback:
+    parsers = {
+        "name": _string,
+        "points": partial(_two_points, point=point),
+        "kick": _velocity,
+        "lit": _flag,
+        "score": _score,
+    }
+    kickback = _record(Kickback, value, loc, parsers)
+    if not 0.0 < math.hypot(*kickback.kick) <= 10.0:
+        loc.key("kick").fail(
+            f"kick speed {math.hypot(*kickback.kick):g} m/s must be in (0, 10] (a real kickback "
+            "fires the ball at a few m/s)"
+        )
+    return kickback
+
+
+def _target_groups(raw: Mapping[str, Any], top: _Loc, point: Parser) -> dict[str, tuple[Any, ...]]:
+    """The stand-up targets, drop banks, spinners and kickbacks, by group name."""
+    groups = {
+        "standup_targets": _group(
+            raw, top, "standup_targets", partial(_standup, point=point), MAX_SEGMENTS
+        ),
+        "drop_targets": _group(
+            raw, top, "drop_targets", partial(_drop_bank, point=point), MAX_DROP_TARGETS
+        ),
+        "spinners": _group(raw, top, "spinners", partial(_spinner, point=point), MAX_SPINNERS),
+        "kickbacks": _group(raw, top, "kickbacks", partial(_kickback, point=point), MAX_KICKBACKS),
+    }
+    n_targets = sum(len(bank.targets) for bank in groups["drop_targets"])
+    if n_targets > MAX_DROP_TARGETS:
+        top.key("drop_targets").fail(f"{n_targets} targets in all, at most {MAX_DROP_TARGETS}")
+    return groups
+
+
+def _solid_walls(elements: Mapping[str, tuple[Any, ...]]) -> tuple[Wall, ...]:
+    """The walls with the stand-up and drop targets (standing) as walls, for the checks."""
+    targets = tuple(t.as_wall() for t in elements.get("standup_targets", ()))
+    banks = tuple(w for bank in elements.get("drop_targets", ()) for w in bank.walls())
+    return elements["walls"] + targets + banks
+
+
+def _ball_save(value: object, loc: _Loc) -> BallSave:
+    return _record(
+        BallSave, value, loc, {"time": partial(_number, low=0.0, high=60.0, open_low=True)}
+    )
+
+
+def _names(
+    value: object, loc: _Loc, known: Iterable[str], what: str, min_len: int = 1
+) -> tuple[str, ...]:
+    """A name or a list of names, each one of ``known`` (a ``what``)."""
+    items = [value] if isinstance(value, str) else _list(value, loc, min_len, MAX_RULES)
+    known = list(known)
+    for i, name in enumerate(items):
+        where = loc if isinstance(value, str) else loc.index(i)
+        _string(name, where)
+        if name not in known:
+            where.fail(f"unknown {what} {_short.repr(name)} (known: {_listing(known) or 'none'})")
+    if len(set(items)) != len(items):
+        loc.fail(f"a {what} is named twice")
+    return tuple(items)
+
+
+def _rules(
+    value: object, loc: _Loc, point: Parser, names: Mapping[str, tuple[str, ...]]
+) -> RuleSet:
+    """The ``rules`` section; ``names`` lists the table's names of each kind (elements, banks,
+    kickbacks) that rules may refer to."""
+    raw = _mapping(value, loc, [], ["lights", "counters", "timers", "max_multiplier", "rules"])
+    light_parsers = {"name": _string, "at": point, "lit": _flag}
+    lights = tuple(
+        _record(Light, item, loc.key("lights").index(i, _name_of(item)), light_parsers)
+        for i, item in enumerate(_list(raw.get("lights", []), loc.key("lights"), 0, MAX_RULES))
+    )
+    counters = tuple(
+        _string(item, loc.key("counters").index(i))
+        for i, item in enumerate(_list(raw.get("counters", []), loc.key("counters"), 0, MAX_RULES))
+    )
+    timer_parsers = {
+        "name": _string,
+        "time": partial(_number, low=0.0, high=600.0, open_low=True),  # [s]
+        "factor": partial(_number, low=1, high=MAX_MULTIPLIER, integer=True),
+        "elements": partial(_names, known=names["elements"], what="element", min_len=0),
+    }
+    timers = tuple(
+        _record(Timer, item, loc.key("timers").index(i, _name_of(item)), timer_parsers)
+        for i, item in enumerate(_list(raw.get("timers", []), loc.key("timers"), 0, MAX_RULES))
+    )
+    for key, items in (("lights", [x.name for x in lights]), ("counters", list(counters)),
+                       ("timers", [x.name for x in timers])):  # fmt: skip
+        if len(set(items)) != len(items):
+            duplicate = next(name for name in items if items.count(name) > 1)
+            loc.key(key).fail(f"{_short.repr(duplicate)} is named twice")
+    known = {
+        **names,
+        "lights": tuple(x.name for x in lights),
+        "counters": counters,
+        "timers": tuple(x.name for x in timers),
+    }
+    max_multiplier = _number(
+        raw.get("max_multiplier", 1), loc.key("max_multiplier"), 1, MAX_MULTIPLIER, integer=True
+    )
+    items = _list(raw.get("rules", []), loc.key("rules"), 0, MAX_RULES)
+    rules = tuple(
+        _rule(item, loc.key("rules").index(i, _name_of(item)), known)
+        for i, item in enumerate(items)
+    )
+    rule_names = [rule.name for rule in rules]
+    if len(set(rule_names)) != len(rule_names):
+        duplicate = next(name for name in rule_names if rule_names.count(name) > 1)
+        loc.key("rules").fail(f"two rules are named {_short.repr(duplicate)}")
+    rule_set = RuleSet(lights, counters, timers, max_multiplier, rules)
+    cycle = find_cycle(rule_set)
+    if cycle:
+        ring = " -> ".join(repr(rules[i].name) for i in cycle)
+        loc.key("rules").fail(
+            f"rules {ring} trigger one another in a ring: they could fire for ever in one frame"
+        )
+    return rule_set
+
+
+def _rule(value: object, loc: _Loc, known: Mapping[str, tuple[str, ...]]) -> Rule:
+    raw = _mapping(value, loc, ["name", "when", "do"])
+    name = _string(raw["name"], loc.key("name"))
+    when = _trigger(raw["when"], loc.key("when"), known)
+    effects = _list(raw["do"], loc.key("do"), 1, MAX_RULES)
+    do = tuple(_effect(item, loc.key("do").index(i), known) for i, item in enumerate(effects))
+    return Rule(name, when, do)
+
+
+# What each trigger and effect names: the kind of name (a key of the known names) and whether a
+# list is allowed; None: a number.
+_TRIGGER_NAMES = {
+    "hit": ("elements", True),
+    "bank": ("banks", False),
+    "lights_on": ("lights", True),
+    "flipper": ("buttons", False),
+    "counter": ("counters", False),
+    "timer_ends": ("timers", False),
+}
+_EFFECT_NAMES = {
+    "light": ("lights", True),
+    "unlight": ("lights", True),
+    "rotate": ("lights", True),
+    "count": ("counters", False),
+    "start_timer": ("timers", False),
+    "light_kickback": ("kickbacks", False),
+    "score": None,
+    "bonus": None,
+    "multiplier": None,
+    "extra_ball": None,
+}
+_KIND_WORDS = {"elements": "element", "banks": "drop bank", "lights": "light",
+               "buttons": "flipper button", "counters": "counter", "timers": "timer",
+               "kickbacks": "kickback"}  # fmt: skip
+
+
+def _one_key(value: object, loc: _Loc, kinds: tuple[str, ...], extra: tuple[str, ...]) -> str:
+    """The one key of ``kinds`` in mapping ``value`` (which may hold ``extra`` keys too)."""
+    raw = _mapping(value, loc, [], (*kinds, *extra))
+    given = [key for key in raw if key in kinds]
+    if len(given) != 1:
+        loc.fail(f"expected exactly one of {', '.join(kinds)}, got {', '.join(given) or 'none'}")
+    return given[0]
+
+
+def _named(
+    value: object, loc: _Loc, spec: tuple[str, bool], known: Mapping[str, Any]
+) -> tuple[str, ...]:
+    kind, many = spec
+    if not many and not isinstance(value, str):
+        loc.fail(f"expected the name of a {_KIND_WORDS[kind]}, got {_describe(value)}")
+    return _names(value, loc, known[kind], _KIND_WORDS[kind])
+
+
+def _trigger(value: object, loc: _Loc, known: Mapping[str, Any]) -> Trigger:
+    kind = _one_key(value, loc, TRIGGERS, ("at",))
+    names = _named(value[kind], loc.key(kind), _TRIGGER_NAMES[kind], known)
+    if ("at" in value) != (kind == "counter"):
+        loc.fail("'at' goes with a counter trigger, and a counter trigger needs it")
+    at = _number(value["at"], loc.key("at"), 1, 10**6, integer=True) if kind == "counter" else 0
+    return Trigger(kind, names, at)
+
+
+def _effect(value: object, loc: _Loc, known: Mapping[str, Any]) -> Effect:
+    kind = _one_key(value, loc, EFFECTS, ("by",))
+    if "by" in value and kind != "count":
+        loc.fail("'by' goes with a count effect only")
+    spec = _EFFECT_NAMES[kind]
+    if spec is None:
+        high = {"score": MAX_SCORE, "bonus": MAX_SCORE, "multiplier": MAX_MULTIPLIER,
+                "extra_ball": 10}[kind]  # fmt: skip
+        return Effect(kind, (), _number(value[kind], loc.key(kind), 1, high, integer=True))
+    names = _named(value[kind], loc.key(kind), spec, known)
+    if kind == "rotate" and len(names) < 2:
+        loc.key(kind).fail("rotate needs at least two lights")
+    by = _number(value.get("by", 1), loc.key("by"), 1, 10**6, integer=True)
+    return Effect(kind, names, by if kind == "count" else 0)
+
+
+def _rules_to_dict(rules: RuleSet) -> dict[str, Any]:
+    """The ``rules`` section as :func:`_rules` reads it."""
+
+    def names(spec: tuple[str, bool] | None, values: tuple[str, ...]) -> Any:
+        return list(values) if spec[1] else values[0]
+
+    def trigger(when: Trigger) -> dict[str, Any]:
+        out = {when.kind: names(_TRIGGER_NAMES[when.kind], when.names)}
+        return {**out, "at": when.at} if when.kind == "counter" else out
+
+    def effect(do: Effect) -> dict[str, Any]:
+        spec = _EFFECT_NAMES[do.kind]
+        if spec is None:
+            return {do.kind: do.value}
+        out = {do.kind: names(spec, do.names)}
+        return {**out, "by": do.value} if do.kind == "count" else out
+
+    return {
+        "lights": [{"name": x.name, "at": list(x.at), "lit": x.lit} for x in rules.lights],
+        "counters": list(rules.counters),
+        "timers": [
+            {"name": x.name, "time": x.time, "factor": x.factor, "elements": list(x.elements)}
+            for x in rules.timers
+        ],
+        "max_multiplier": rules.max_multiplier,
+        "rules": [
+            {"name": r.name, "when": trigger(r.when), "do": [effect(e) for e in r.do]}
+            for r in rules.rules
+        ],
+    }
+
+
+_NAMED_GROUPS = (
+    "walls",
+    "standup_targets",
+    "posts",
+    "flippers",
+    "sensors",
+    "spinners",
+    "kickbacks",
+)
+
+
+def rule_names(table_elements: Mapping[str, tuple[Any, ...]]) -> dict[str, tuple[str, ...]]:
+    """What the rules of a table with these element groups may name."""
+    groups = table_elements
+    elements = [e.name for group in _NAMED_GROUPS for e in groups.get(group, ())]
+    elements += [t.name for bank in groups.get("drop_targets", ()) for t in bank.targets]
+    return {
+        "elements": tuple(elements),
+        "banks": tuple(bank.name for bank in groups.get("drop_targets", ())),
+        "kickbacks": tuple(k.name for k in groups.get("kickbacks", ())),
+        "buttons": FLIPPER_BUTTONS,
+    }

@@ -1,0 +1,181 @@
+"""A table's rules as data: lights, counters and timers, and rules that fire on a trigger and
+apply their effects (the ``rules`` section of a table file; ``schema`` validates it,
+``game.rulebook`` plays it).
+
+A rule is ``when`` (one trigger) and ``do`` (effects, in order):
+
+- triggers: ``hit`` (any of the named elements hit: a sensor crossed, a target or bumper struck,
+  a spinner's revolution, a kickback's line crossed), ``bank`` (a drop bank's last target
+  falls), ``lights_on`` (the named lights become all lit), ``flipper`` (a flipper button,
+  ``left``, ``right`` or ``any``, pressed), ``counter`` (a counter reaches ``at``; it then starts
+  again from 0) and ``timer_ends``;
+- effects: ``light``, ``unlight`` (lights), ``rotate`` (lights pass their states one place on,
+  the last's to the first: a "lane change"), ``count`` (add ``by``, default 1, to a counter),
+  ``start_timer`` (a timer runs for its ``time`` again; while it runs, the points of its
+  ``elements`` are multiplied by its ``factor``), ``score`` (points now), ``bonus`` (points to
+  the end-of-ball bonus), ``multiplier`` (raise the bonus multiplier, up to
+  ``max_multiplier``), ``light_kickback`` and ``extra_ball``.
+
+At the end of each ball the bonus times the multiplier is scored (nothing on a tilt), and both
+start again (0 and x1); lights, counters and timers carry over to the next ball.
+
+Rules fire in a frame after its physics: first those whose trigger is a physical event (hit,
+bank, flipper, timer_ends), in file order, then those triggered by other rules (lights_on,
+counter), each after every rule that could trigger it. A set of rules that could trigger each
+other in a ring (and so could fire for ever within a frame) is refused (:func:`find_cycle`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# Triggers set off by the physics or the player, and those set off by other rules' effects.
+EVENT_TRIGGERS = ("hit", "bank", "flipper", "timer_ends")
+RULE_TRIGGERS = ("lights_on", "counter")
+TRIGGERS = EVENT_TRIGGERS + RULE_TRIGGERS
+EFFECTS = (
+    "light",
+    "unlight",
+    "rotate",
+    "count",
+    "start_timer",
+    "score",
+    "bonus",
+    "multiplier",
+    "light_kickback",
+    "extra_ball",
+)
+FLIPPER_BUTTONS = ("left", "right", "any")
+# Events that are no rule's but are reported with them (``info["rule_events"]``).
+BALL_SAVED = "ball saved"
+BONUS_SCORED = "end-of-ball bonus"
+
+
+@dataclass(frozen=True)
+class Light:
+    """A lamp on the playfield that the rules light and put out."""
+
+    name: str
+    at: tuple[float, float]  # where it is drawn [m]
+    lit: bool = False  # at the start of a game [-]
+
+
+@dataclass(frozen=True)
+class Timer:
+    """A mode: while it runs, the points of ``elements`` are multiplied by ``factor``."""
+
+    name: str
+    time: float  # how long it runs once started [s]
+    factor: int = 1  # [-]
+    elements: tuple[str, ...] = ()  # element names (a wall's segments by the wall's name)
+
+
+@dataclass(frozen=True)
+class Trigger:
+    """What fires a rule: ``kind`` (one of TRIGGERS) and the names it is about (elements,
+    a bank, lights, a flipper button, a counter, a timer); ``at`` for a counter."""
+
+    kind: str
+    names: tuple[str, ...]
+    at: int = 0
+
+
+@dataclass(frozen=True)
+class Effect:
+    """What a rule does: ``kind`` (one of EFFECTS), the names it acts on (lights, a counter, a
+    timer, a kickback) and its number (points, steps, balls)."""
+
+    kind: str
+    names: tuple[str, ...] = ()
+    value: int = 0
+
+
+@dataclass(frozen=True)
+class Rule:
+    name: str
+    when: Trigger
+    do: tuple[Effect, ...]
+
+
+@dataclass(frozen=True)
+class RuleSet:
+    """The ``rules`` section of a table."""
+
+    lights: tuple[Light, ...] = ()
+    counters: tuple[str, ...] = ()
+    timers: tuple[Timer, ...] = ()
+    max_multiplier: int = 1  # the bonus multiplier's top [-]
+    rules: tuple[Rule, ...] = ()
+
+    @property
+    def event_names(self) -> tuple[str, ...]:
+        """Names of what ``info["rule_events"]`` counts: the rules, then the ball save and the
+        end-of-ball bonus."""
+        return (*(rule.name for rule in self.rules), BALL_SAVED, BONUS_SCORED)
+
+    def triggers(self, effect: Effect, rule: Rule) -> bool:
+        """Whether ``effect`` can set off ``rule``'s trigger within the same frame."""
+        when = rule.when
+        if when.kind == "lights_on":
+            return effect.kind in ("light", "rotate") and bool(set(effect.names) & set(when.names))
+        if when.kind == "counter":
+            return effect.kind == "count" and effect.names == when.names
+        return False
+
+    def order(self) -> tuple[int, ...]:
+        """The rules in the order they are run in a frame: event-triggered ones in file order,
+        then the rest each after every rule that can trigger it (raises ValueError on a
+        cycle, see :func:`find_cycle`)."""
+        cycle = find_cycle(self)
+        if cycle:
+            raise ValueError(" -> ".join(repr(self.rules[i].name) for i in cycle))
+        first = [i for i, rule in enumerate(self.rules) if rule.when.kind in EVENT_TRIGGERS]
+        done: list[int] = []
+
+        def visit(i: int) -> None:
+            if i in done:
+                return
+            for j, other in enumerate(self.rules):
+                if other.when.kind in RULE_TRIGGERS and any(
+                    self.triggers(e, self.rules[i]) for e in other.do
+                ):
+                    visit(j)
+            done.append(i)
+
+        for i, rule in enumerate(self.rules):
+            if rule.when.kind in RULE_TRIGGERS:
+                visit(i)
+        return (*first, *done)
+
+
+def find_cycle(rules: RuleSet) -> list[int]:
+    """Indices of rules that can trigger one another in a ring (the first's index repeated at
+    the end), or [] when there is none. A rule's effect triggers another rule when it lights
+    one of the lights that rule waits for all of, or counts on its counter."""
+    edges = [
+        [j for j, other in enumerate(rules.rules) if any(rules.triggers(e, other) for e in rule.do)]
+        for rule in rules.rules
+    ]
+    state = [0] * len(edges)  # 0 new, 1 on the path, 2 done
+    path: list[int] = []
+
+    def walk(i: int) -> list[int]:
+        state[i] = 1
+        path.append(i)
+        for j in edges[i]:
+            if state[j] == 1:
+                return [*path[path.index(j) :], j]
+            if state[j] == 0:
+                found = walk(j)
+                if found:
+                    return found
+        path.pop()
+        state[i] = 2
+        return []
+
+    for i in range(len(edges)):
+        if state[i] == 0:
+            found = walk(i)
+            if found:
+                return found
+    return []
