@@ -152,6 +152,9 @@ def rollouts(
                 "length": int(info["frames"]),
                 "balls_lost": int(balls - info["balls_left"]),
                 "truncated": bool(info.get("TimeLimit.truncated", False)),
+                # Points the rules scored (modes, awards, end-of-ball bonuses), on a table with
+                # rules: the rest came from plain hits.
+                **({"rule_score": int(info["rule_score"])} if "rule_score" in info else {}),
             }
     return rows  # type: ignore[return-value]
 

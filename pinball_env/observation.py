@@ -38,6 +38,9 @@ CACHED_RENDERERS = 512
 # +-MAX_CABINET_SPEED [m/s]: a shove moves a real cabinet a few millimetres at a few dm/s.
 MAX_CABINET_OFFSET = 0.02
 MAX_CABINET_SPEED = 1.0
+# The rules' rows give the bonus in thousands of points and counters as counts, clipped to these.
+MAX_OBS_BONUS = 100.0
+MAX_OBS_COUNT = 100.0
 
 
 class StateObserver:
@@ -78,6 +81,12 @@ class StateObserver:
             high = np.concatenate(
                 [high, [stroke, 1.0, offset, offset, speed, speed, table.tilt.warnings + 1, 1.0]]
             )
+        rules = self.game.table.rules
+        if rules is not None:  # the rules' rows (see rule_observation)
+            counts = self.rule_counts()
+            low = np.concatenate([low, np.zeros(sum(counts[:-1])), [1.0, 0.0]])
+            tops = [1.0] * sum(counts[:4]) + [MAX_OBS_COUNT] * counts[4]
+            high = np.concatenate([high, tops, [rules.max_multiplier, MAX_OBS_BONUS]])
         low = np.concatenate([low, np.zeros(self.rays)]).astype(np.float32)
         high = np.concatenate([high, np.ones(self.rays)]).astype(np.float32)
         return low, high
@@ -104,12 +113,44 @@ class StateObserver:
                 state.tilted,
             )  # fmt: skip
             obs = np.concatenate([obs, cabinet], axis=1)
+        if self.game.table.rules is not None:
+            obs = np.concatenate([obs, self.rule_observation()], axis=1)
         if self.rays:
             args = (state.balls, tables.geometries(), state.flipper_angle, self.rays,
                     self._ray_distances)  # fmt: skip
             world.threads.run(cast_all_rays, world.n_envs, *args)
             obs = np.concatenate([obs, self._ray_distances], axis=1)
         return obs
+
+
+    def rule_counts(self) -> tuple[int, ...]:
+        """How many rows each part of the rules' rows has: lights, drop targets, kickbacks,
+        timers, counters, and 2 (multiplier, bonus)."""
+        table = self.game.table
+        rules = table.rules
+        return (len(rules.lights), len(table.drop_target_list), len(table.kickbacks),
+                len(rules.timers), len(rules.counters), 2)  # fmt: skip
+
+    def rule_observation(self) -> np.ndarray:
+        """The rules' rows of every env, float32: each light (1 lit), drop target (1 up) and
+        kickback (1 lit), each timer's share of its time left, each counter (clipped to
+        MAX_OBS_COUNT), the bonus multiplier and the bonus in thousands of points (clipped to
+        MAX_OBS_BONUS)."""
+        game, world = self.game.state, self.game.world.state
+        n_timers = len(self.game.book.timer_frames)
+        return np.concatenate(
+            [
+                game.lights,
+                world.targets_up[:, : len(self.game.table.drop_target_list)],
+                world.kickback_lit[:, : len(self.game.table.kickbacks)],
+                game.timers / self.game.book.timer_frames.reshape(1, n_timers),
+                np.minimum(game.counters, MAX_OBS_COUNT),
+                game.multiplier[:, None],
+                np.minimum(game.bonus / 1000.0, MAX_OBS_BONUS)[:, None],
+            ],
+            axis=1,
+            dtype=np.float32,
+        )
 
 
 class TableRenderers:
@@ -226,6 +267,8 @@ def cabinet_observation(pull, on_plunger, cabinet, warnings, tilted):
 __all__ = [
     "MAX_CABINET_OFFSET",
     "MAX_CABINET_SPEED",
+    "MAX_OBS_BONUS",
+    "MAX_OBS_COUNT",
     "MAX_OBS_SPEED",
     "ImageObserver",
     "Observer",
