@@ -23,9 +23,10 @@ from pinball_env.physics.columns import (
     CABINET_VX,
     CABINET_X,
     CABINET_Y,
+    SPIN_ANGLE,
 )
 from pinball_env.physics.rays import cast_all_rays
-from pinball_env.render import Renderer
+from pinball_env.render import Renderer, TargetsView
 from pinball_env.sim.tables import flipper_numbers
 from pinball_env.table import Table
 
@@ -122,7 +123,6 @@ class StateObserver:
             obs = np.concatenate([obs, self._ray_distances], axis=1)
         return obs
 
-
     def rule_counts(self) -> tuple[int, ...]:
         """How many rows each part of the rules' rows has: lights, drop targets, kickbacks,
         timers, counters, and 2 (multiplier, bonus)."""
@@ -188,7 +188,8 @@ class ImageObserver:
         if not world.tables.varied:
             return self.renderers(world.table).frames(
                 state.balls, self.game.in_play, state.flipper_angle, grayscale=self.grayscale,
-                threads=world.threads, **self._cabinet(slice(None)),
+                threads=world.threads, targets=targets_view(self.game, slice(None)),
+                **self._cabinet(slice(None)),
             )  # fmt: skip
         frames = []
         for env in range(world.n_envs):
@@ -196,7 +197,9 @@ class ImageObserver:
             renderer = self.renderers(world.table_of(env))
             frames.append(renderer.frames(
                 state.balls[one], self.game.in_play[one], state.flipper_angle[one],
-                grayscale=self.grayscale, **self._cabinet(one),
+                grayscale=self.grayscale,
+                targets=targets_view(self.game, one, world.table_of(env)),
+                **self._cabinet(one),
             ))  # fmt: skip
         return np.concatenate(frames)
 
@@ -214,6 +217,23 @@ class ImageObserver:
 
 
 Observer = StateObserver | ImageObserver
+
+
+def targets_view(game: Game, envs: slice, table: Table | None = None) -> TargetsView | None:
+    """What the pictures of ``envs``, which play ``table`` (by default the game's), show of its
+    targets and rules (None for a table with neither); the rows may be wider than the table
+    needs (see ``World.set_table``)."""
+    table = table or game.table
+    if not (table.has_targets or table.rules is not None):
+        return None
+    state = game.world.state
+    counts = (len(table.drop_target_list), len(table.spinners), len(table.kickbacks))
+    return TargetsView(
+        targets_up=state.targets_up[envs, : counts[0]],
+        spinner_angles=state.spinners[envs, : counts[1], SPIN_ANGLE],
+        kickback_lit=state.kickback_lit[envs, : counts[2]],
+        lights=game.state.lights[envs],
+    )
 
 
 def make_observer(
@@ -277,4 +297,5 @@ __all__ = [
     "cabinet_observation",
     "make_observer",
     "state_observation",
+    "targets_view",
 ]

@@ -143,6 +143,8 @@ class PinballOptions(_Checked):
     """Weight of the height shaping term, the ball's rise in table heights (0: off)."""
     drain_penalty: float = _option(0.0, checks.finite)
     """Reward taken off for each ball that drains (0: off)."""
+    bonus_shaping: float = _option(0.0, checks.finite)
+    """Share of the end-of-ball bonus's reward paid as it is earned (tables with rules; 0: off)."""
     frame_skip: int = _option(1, _at_least(1, MAX_FRAME_SKIP))
     """Frames per step (1-60), the action held on each."""
     skip_above: float = _option(0.0, checks.fraction)

@@ -12,7 +12,7 @@ from gymnasium import spaces
 
 from pinball_env.envs.layouts import Layouts, frame_size
 from pinball_env.game import Game
-from pinball_env.observation import TableRenderers, make_observer
+from pinball_env.observation import TableRenderers, make_observer, targets_view
 from pinball_env.options import PinballOptions
 from pinball_env.render import (
     SHAKE_EXAGGERATION,
@@ -152,9 +152,14 @@ class PinballCore:
         table = world.table_of(env)
         renderer = self.frame_renderers(table)
         ball, angles = tuple(world.balls[env, :2]), world.state.flipper_angle[env]
+        targets = targets_view(game, slice(env, env + 1), table)
+        rules = {}
+        if table.rules is not None:
+            rules = {"bonus": game.state.bonus[env], "multiplier": game.state.multiplier[env]}
         if not game.cabinet:
-            playfield = renderer.frame(ball, angles)
-            board = scoreboard(playfield.shape[0], game.score[env], game.balls_left[env])
+            playfield = renderer.frame(ball, angles, targets=targets)
+            board = scoreboard(playfield.shape[0], game.score[env], game.balls_left[env],
+                               **rules)  # fmt: skip
             return np.concatenate([playfield, board], axis=1)
         info = game.info(env)  # "tilted" holds a tilt of the last step that ended at once
         playfield = renderer.frame(
@@ -163,6 +168,7 @@ class PinballCore:
             plunger_pull=info["plunger_pull"],
             on_plunger=info["ball_on_plunger"],
             cabinet_offset=tuple(SHAKE_EXAGGERATION * info["cabinet_offset"]),
+            targets=targets,
         )
         board = scoreboard(
             playfield.shape[0],
@@ -171,6 +177,7 @@ class PinballCore:
             tilt_warnings=info["tilt_warnings"],
             allowed_warnings=table.tilt.warnings,
             tilted=info["tilted"],
+            **rules,
         )
         return np.concatenate([playfield, board], axis=1)
 

@@ -201,7 +201,8 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     ```python
     gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
-             reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, frame_skip=1,
+             reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, bonus_shaping=0.0,
+             frame_skip=1,
              skip_above=0.0, max_frames=None, image_size=(84, 84), physics="swept",
              render_mode=None, num_layouts=0, start_layout=0, difficulty="easy", rays=0)
     gym.make("PinballProcgen-v0", num_layouts=16, ...)  # table="generated", the rest the same
@@ -225,6 +226,10 @@ class PinballEnv(CoreAttributes, gym.Env):
     - ``reward_scale``: reward per point.
     - ``height_shaping``: weight of the optional height shaping term (0 = off).
     - ``drain_penalty``: reward taken off for each ball that drains (0 = off).
+    - ``bonus_shaping``: a training aid on a table with rules, 0 (off) to 1: that share of the
+      end-of-ball bonus's reward is paid as the bonus is earned (each frame, the change of the
+      bonus times the multiplier, times ``reward_scale``) and taken off where it is scored, so
+      that losing a ball never looks like a way to collect it. The score is unchanged.
     - ``frame_skip``: frames per step (1-60), the action held on each; rewards, ``points`` and
       ``drained`` are summed over them, and a game that ends stops there.
     - ``skip_above``: a training aid, 0 (off) or a height in table heights (0-1): after the

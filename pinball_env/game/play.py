@@ -32,6 +32,7 @@ class Rules(NamedTuple):
     reward_scale: float
     drain_penalty: float
     height_shaping: float
+    bonus_shaping: float  # share of the end-of-ball bonus rewarded as it is earned
     heights: np.ndarray  # (N,) float64: table heights [m]
     skip_heights: np.ndarray  # (N,) float64: skip_above in metres
     frame_skip: int
@@ -75,6 +76,7 @@ class StepProgress(NamedTuple):
     points: np.ndarray  # (N,) int64: summed over the step's frames
     drained: np.ndarray  # (N,) bool: a ball drained in the step
     height_before: np.ndarray  # (N,) float64: the ball's height when the frame began [m]
+    bonus_before: np.ndarray  # (N,) int64: the bonus times the multiplier when it began
     frame_points: np.ndarray  # (N,) int64: points of the frame under way
     frame_drained: np.ndarray  # (N,) bool: the frame under way drained a ball
     launch: np.ndarray  # (N,) bool: waits for a ball off the plunger before it goes on
@@ -196,6 +198,8 @@ def play_frames(
                             cabinet[env, CABINET_SHOVE_Y] = rules.nudge_impulse * dy / length
                             nudge_wait[env] = rules.nudge_frames
                 height_before[env] = balls[env, BALL_Y]
+                if rules.bonus_shaping:
+                    progress.bonus_before[env] = state.bonus[env] * state.multiplier[env]
                 stage[env] = PHYSICS
             elif now == PHYSICS:
                 if not swept:
@@ -277,6 +281,11 @@ def play_frames(
                 reward = frame_points[env] * rules.reward_scale
                 if rules.drain_penalty:
                     reward -= rules.drain_penalty * gone
+                if rules.bonus_shaping:
+                    # The bonus's reward as it is earned; where it is scored (or lost), the
+                    # pending bonus falls to 0 and its share is taken back.
+                    pending = state.bonus[env] * state.multiplier[env] - progress.bonus_before[env]
+                    reward += rules.bonus_shaping * rules.reward_scale * pending
                 if rules.height_shaping:
                     # A drained ball's last height is where it crossed the drain, not the next's.
                     after = drain_height[env] if gone else balls[env, BALL_Y]
@@ -347,6 +356,7 @@ def new_progress(n_envs: int) -> StepProgress:
         points=np.zeros(n_envs, dtype=np.int64),
         drained=np.zeros(n_envs, dtype=bool),
         height_before=np.zeros(n_envs),
+        bonus_before=np.zeros(n_envs, dtype=np.int64),
         frame_points=np.zeros(n_envs, dtype=np.int64),
         frame_drained=np.zeros(n_envs, dtype=bool),
         launch=np.zeros(n_envs, dtype=bool),

@@ -128,6 +128,7 @@ class Game:
         self.reward_scale = options.reward_scale
         self.height_shaping = options.height_shaping
         self.drain_penalty = options.drain_penalty
+        self.bonus_shaping = options.bonus_shaping
         self.frame_skip = options.frame_skip
         self.skip_above = options.skip_above
         self.max_frames = options.max_frames
@@ -436,6 +437,7 @@ class Game:
             reward_scale=self.reward_scale,
             drain_penalty=self.drain_penalty,
             height_shaping=self.height_shaping,
+            bonus_shaping=self.bonus_shaping if self.book.active else 0.0,
             heights=self.world.tables.height,
             skip_heights=self.skip_above * self.world.tables.height,
             frame_skip=self.frame_skip,

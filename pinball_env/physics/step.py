@@ -670,8 +670,10 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                         used *= u
                 if n_spinners > 0:
                     for j in range(n_spinners):
-                        if sensor_crossing(x, y, vx * used, vy * used, spinners[j]) < INF:
-                            spin_spinner(spinners[j], spins[j], vx, vy)
+                        u = sensor_crossing(x, y, vx * used, vy * used, spinners[j])
+                        if u < INF:
+                            time = k * h + h - remaining + used * u
+                            spin_spinner(spinners[j], spins[j], vx, vy, time)
                 # Sensor crossings on the way to the contact (or to the end of the substep),
                 # after a cheap test that rules out the common case.
                 crossed = False

@@ -41,14 +41,18 @@ TWO_PI = 2.0 * math.pi
 
 
 @njit(cache=True)
-def spin_spinner(spinner, spin, vx, vy):
-    """A ball crossing ``spinner`` (a row of ``Geometry.spinners``) at (vx, vy) spins its flap
-    (``spin``, the spinner's row of ``State.spinners``) at its normal speed over the flap's
-    radius, in the direction it passed, unless the flap already turns faster."""
+def spin_spinner(spinner, spin, vx, vy, time):
+    """A ball crossing ``spinner`` (a row of ``Geometry.spinners``) at (vx, vy), ``time``
+    seconds into the frame, spins its flap (``spin``, the spinner's row of ``State.spinners``)
+    at its normal speed over the flap's radius, in the direction it passed, unless the flap
+    already turns faster. The angle is set back by what the new spin would have turned it
+    before ``time``, so that :func:`turn_spinner`, at the end of the frame, turns it by the
+    old spin until ``time`` and the new one after."""
     ex = spinner[SPINNER_X1] - spinner[SPINNER_X0]
     ey = spinner[SPINNER_Y1] - spinner[SPINNER_Y0]
     omega = (ex * vy - ey * vx) / (math.sqrt(ex * ex + ey * ey) * spinner[SPINNER_RADIUS])
     if abs(omega) > abs(spin[SPIN_OMEGA]):
+        spin[SPIN_ANGLE] += (spin[SPIN_OMEGA] - omega) * time
         spin[SPIN_OMEGA] = omega
 
 
@@ -75,8 +79,9 @@ def turn_spinner(spinner, spin, dt):
 @njit(cache=True)
 def raise_banks(geometry, state, env, x, y, r, dt):
     """Advance the clock of every bank of env ``env`` whose targets are all down by ``dt``, and
-    stand a bank up once its clock reaches its reset time, unless the ball (at (x, y), radius
-    ``r``) lies within a radius of one of its targets: then it waits for the ball to leave."""
+    stand a bank up once its clock reaches its reset time, unless the ball in play (at (x, y),
+    radius ``r``) lies within a radius of one of its targets: then it waits for the ball to
+    leave."""
     bank_of, targets = geometry.drop_target_bank, geometry.drop_targets
     up, clock = state.targets_up[env], state.bank_clock[env]
     for bank in range(geometry.bank_reset.shape[0]):
@@ -92,7 +97,7 @@ def raise_banks(geometry, state, env, x, y, r, dt):
         if clock[bank] < geometry.bank_reset[bank]:
             continue
         clear = True
-        for j in range(targets.shape[0]):
+        for j in range(targets.shape[0] if state.active[env] else 0):
             t = targets[j]
             if bank_of[j] == bank and point_segment_distance(x, y, t[0], t[1], t[2], t[3]) < 2 * r:
                 clear = False

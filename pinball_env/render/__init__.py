@@ -37,6 +37,7 @@ from pinball_env.render.raster import (
     WALL_HALF_WIDTH,
     FrameRenderer,
     Renderer,
+    TargetsView,
     fit_size,
     render_size,
 )
@@ -68,6 +69,7 @@ __all__ = [
     "Colour",
     "FrameRenderer",
     "Renderer",
+    "TargetsView",
     "Window",
     "fit_size",
     "luminance",

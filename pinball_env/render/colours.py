@@ -18,6 +18,13 @@ DRAIN = (92, 52, 62)
 FLIPPER = (250, 195, 60)
 BALL = (248, 248, 252)
 PLUNGER = (190, 195, 210)  # the player's plunger: steel, darker than the ball in grayscale
+# Targets and rules: standing drop targets and stand-ups, fallen ones, spinner flaps, lit and dark
+# lamps (the rules' lights, a lit kickback).
+TARGET = (120, 170, 250)
+TARGET_DOWN = (44, 52, 78)
+SPINNER = (200, 205, 220)
+LIGHT_ON = (255, 240, 120)
+LIGHT_OFF = (70, 62, 40)
 SCOREBOARD_TEXT = (250, 195, 60)
 SCOREBOARD_ALERT = (235, 60, 50)  # the scoreboard's tilt warnings and TILT
 

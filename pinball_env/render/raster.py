@@ -14,6 +14,7 @@ Image row 0 is the top of the table (y = height) and x grows to the right; the c
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,10 +24,15 @@ from pinball_env.render.colours import (
     DRAIN,
     FLIPPER,
     KICKER,
+    LIGHT_OFF,
+    LIGHT_ON,
     ONE_SIDED,
     PLUNGER,
     POST,
     SENSOR,
+    SPINNER,
+    TARGET,
+    TARGET_DOWN,
     WALL,
     luminance,
     rgb,
@@ -37,6 +43,8 @@ from pinball_env.table import Table
 
 WALL_HALF_WIDTH = 0.002  # [m]: walls are drawn 4 mm wide (more where a pixel is coarser)
 SENSOR_HALF_WIDTH = 0.001  # [m]
+TARGET_HALF_WIDTH = 0.003  # [m]: a standing drop target, thicker than a wall
+LAMP_RADIUS = 0.007  # [m]: the rules' lights, and a kickback's lamp
 
 # Scale of rendered frames (render()), as opposed to observations, which have a size in pixels.
 PIXELS_PER_METRE = 600.0
@@ -85,6 +93,17 @@ def fit_size(table: Table, width: int, height: int) -> tuple[int, int]:
 def _check_size(width: int, height: int) -> None:
     if width < 1 or height < 1:
         raise ValueError(f"image size must be at least 1x1, got {width}x{height}")
+
+
+class TargetsView(NamedTuple):
+    """What a picture shows of the targets and rules of a batch of envs (rows are envs; a table
+    without some kind has 0 columns of it): ``State.targets_up``, the spinners' angles [rad]
+    (``State.spinners[..., SPIN_ANGLE]``), ``State.kickback_lit`` and the rules' lights."""
+
+    targets_up: np.ndarray  # (N, T) bool
+    spinner_angles: np.ndarray  # (N, P) float64
+    kickback_lit: np.ndarray  # (N, K) bool
+    lights: np.ndarray  # (N, L) bool
 
 
 class Renderer:
@@ -155,6 +174,10 @@ class Renderer:
         for post in table.posts:
             colour = rgb(KICKER if post.kick > 0 else POST)
             paint_disc(image, *post.center, post.radius, colour, *view)
+        for target in table.standup_targets:
+            paint_line(image, *target.segment, TARGET_HALF_WIDTH * scale, rgb(TARGET), *view)
+        for line in (*table.spinners, *table.kickbacks):
+            paint_line(image, *line.segment, SENSOR_HALF_WIDTH * scale, rgb(SENSOR), *view)
         image.flags.writeable = False  # frames copy it; nothing may paint on it
         return image
 
@@ -166,14 +189,16 @@ class Renderer:
         plunger_pull: float | None = None,
         on_plunger: bool = False,
         cabinet_offset: tuple[float, float] | None = None,
+        targets: TargetsView | None = None,
     ) -> np.ndarray:
         """The table with the flippers at ``flipper_angles`` [rad] (one per ``table.flippers``
         entry, in order) and the ball at ``ball_position`` [m] (None: out of play, not drawn),
-        as a new (height, width, 3) uint8 array. The cabinet's arguments are :meth:`frames`'s,
-        for the one env."""
+        as a new (height, width, 3) uint8 array. The cabinet's and the targets' arguments are
+        :meth:`frames`'s, for the one env (``targets`` a batch of one)."""
         return self._one(
-            ball_position, flipper_angles, False, plunger_pull, on_plunger, cabinet_offset
-        )
+            ball_position, flipper_angles, False, plunger_pull, on_plunger, cabinet_offset,
+            targets,
+        )  # fmt: skip
 
     def grayscale(
         self,
@@ -183,11 +208,13 @@ class Renderer:
         plunger_pull: float | None = None,
         on_plunger: bool = False,
         cabinet_offset: tuple[float, float] | None = None,
+        targets: TargetsView | None = None,
     ) -> np.ndarray:
         """:meth:`frame` as (height, width, 1) uint8 luma (:data:`LUMA_WEIGHTS`)."""
         return self._one(
-            ball_position, flipper_angles, True, plunger_pull, on_plunger, cabinet_offset
-        )
+            ball_position, flipper_angles, True, plunger_pull, on_plunger, cabinet_offset,
+            targets,
+        )  # fmt: skip
 
     def frames(
         self,
@@ -201,6 +228,7 @@ class Renderer:
         plunger_pull: np.ndarray | None = None,
         on_plunger: np.ndarray | None = None,
         cabinet_offset: np.ndarray | None = None,
+        targets: TargetsView | None = None,
     ) -> np.ndarray:
         """Frames of a batch of envs: ball centres ``balls`` (N, >= 2) [m], drawn where
         ``visible`` (N,) bool, flippers at ``flipper_angles`` (N, F) [rad]. Returns (N, height,
@@ -212,7 +240,10 @@ class Renderer:
         hold them): ``plunger_pull`` (N,) [m] draws the plunger pulled back by it, ``on_plunger``
         (N,) bool lowers those balls with it (they wait on it, at ``table.plunger.position``),
         ``cabinet_offset`` (N, 2) [m] (x, y) moves the whole playfield (the ``CABINET_X``,
-        ``CABINET_Y`` columns, times an exaggeration if wanted, see SHAKE_EXAGGERATION)."""
+        ``CABINET_Y`` columns, times an exaggeration if wanted, see SHAKE_EXAGGERATION).
+
+        ``targets`` (a table with targets or rules) draws the drop targets standing or fallen,
+        the spinners' flaps as they turn, the kickbacks' lamps and the rules' lights."""
         flipper_angles = np.asarray(flipper_angles, dtype=np.float64)
         if flipper_angles.ndim != 2 or flipper_angles.shape[1] != len(self._flippers):
             raise ValueError(
@@ -247,10 +278,64 @@ class Renderer:
             draw_moving_parts(*args, 0, n)
         else:
             threads.run(draw_moving_parts, n, *args)
+        if targets is not None:
+            self._paint_targets(pictures, targets, balls, visible, shifts, grayscale)
         if not fills:
             out[...] = luminance(BACKGROUND) if grayscale else BACKGROUND
             out[:, self.top : self.top + rows, self.left : self.left + columns] = pictures
         return out
+
+    def _paint_targets(
+        self,
+        pictures: np.ndarray,
+        targets: TargetsView,
+        balls: np.ndarray,
+        visible: np.ndarray,
+        shifts: np.ndarray,
+        grayscale: bool,
+    ) -> None:
+        """Paint each env's targets and lights over its picture (moved with the cabinet), then
+        its ball again, on top."""
+        table, view = self.table, self._view
+        sx, sy, _ = view
+        scale = math.sqrt(sx * sy)
+        paint = luminance if grayscale else rgb
+        colours = {name: paint(colour) for name, colour in (
+            ("up", TARGET), ("down", TARGET_DOWN), ("flap", SPINNER), ("on", LIGHT_ON),
+            ("off", LIGHT_OFF), ("ball", BALL))}  # fmt: skip
+        drop_targets = table.drop_target_list
+        for env in range(pictures.shape[0]):
+            image = pictures[env]
+            dx, dy = shifts[env, 1] / sx, -shifts[env, 0] / sy
+            for j, target in enumerate(drop_targets):
+                up = targets.targets_up[env, j]
+                x0, y0, x1, y1 = target.segment
+                half = (TARGET_HALF_WIDTH if up else SENSOR_HALF_WIDTH) * scale
+                colour = colours["up" if up else "down"]
+                paint_line(image, x0 + dx, y0 + dy, x1 + dx, y1 + dy, half, colour, *view)
+            for j, spinner in enumerate(table.spinners):
+                # The flap seen from above: edge on at angle 0, its whole width across.
+                half = abs(math.sin(targets.spinner_angles[env, j])) * spinner.radius * scale
+                x0, y0, x1, y1 = spinner.segment
+                paint_line(image, x0 + dx, y0 + dy, x1 + dx, y1 + dy, half, colours["flap"],
+                           *view)  # fmt: skip
+            lamps = [
+                (
+                    0.5 * (k.segment[0] + k.segment[2]),
+                    0.5 * (k.segment[1] + k.segment[3]),
+                    targets.kickback_lit[env, j],
+                )
+                for j, k in enumerate(table.kickbacks)
+            ]
+            if table.rules is not None:
+                lamps += [(*light.at, targets.lights[env, j])
+                          for j, light in enumerate(table.rules.lights)]  # fmt: skip
+            for x, y, lit in lamps:
+                colour = colours["on" if lit else "off"]
+                paint_disc(image, x + dx, y + dy, LAMP_RADIUS, colour, *view)
+            if visible[env]:
+                x, y = balls[env, 0] + dx, balls[env, 1] + dy
+                paint_disc(image, x, y, table.ball.radius, colours["ball"], *view)
 
     def _shifts(self, n: int, cabinet_offset: np.ndarray | None) -> np.ndarray:
         """(n, 2) int64 (rows down, columns right): the cabinet's offsets in whole pixels."""
@@ -291,6 +376,7 @@ class Renderer:
         plunger_pull: float | None = None,
         on_plunger: bool = False,
         cabinet_offset: tuple[float, float] | None = None,
+        targets: TargetsView | None = None,
     ) -> np.ndarray:
         if len(flipper_angles) != len(self._flippers):
             raise ValueError(
@@ -304,7 +390,7 @@ class Renderer:
         offset = None if cabinet_offset is None else np.array([cabinet_offset], dtype=np.float64)
         return self.frames(
             ball, np.array([visible]), angles, grayscale, plunger_pull=pull,
-            on_plunger=waiting, cabinet_offset=offset,
+            on_plunger=waiting, cabinet_offset=offset, targets=targets,
         )[0]  # fmt: skip
 
 

@@ -1,5 +1,6 @@
-"""The scoreboard beside rendered frames: the score and the balls left, in a 3x5 pixel font, and
-on a table with the cabinet its tilt warnings and TILT."""
+"""The scoreboard beside rendered frames: the score and the balls left, in a 3x5 pixel font; on a
+table with the cabinet its tilt warnings and TILT, on one with rules the bonus and its
+multiplier."""
 
 import numpy as np
 
@@ -15,14 +16,15 @@ _FONT = {
     "C": (7, 4, 4, 4, 7), "E": (7, 4, 7, 4, 7), "G": (7, 4, 5, 5, 7), "I": (7, 2, 2, 2, 7),
     "L": (4, 4, 4, 4, 7), "N": (6, 5, 5, 5, 5), "O": (7, 5, 5, 5, 7), "R": (6, 5, 6, 5, 5),
     "S": (7, 4, 7, 1, 7), "T": (7, 2, 2, 2, 2), "W": (5, 5, 7, 7, 5), "/": (1, 1, 2, 4, 4),
+    "U": (5, 5, 5, 5, 7), "X": (5, 5, 2, 5, 5),
     " ": (0, 0, 0, 0, 0),
 }  # fmt: skip
 
 
 def text_mask(text: str, scale: int) -> np.ndarray:
     """(5 scale, 4 scale len(text)) bool pixels of ``text`` in the scoreboard font (digits, "/"
-    and the letters of SCORE, BALLS, WARNING and TILT), each font pixel a ``scale`` x ``scale``
-    block."""
+    and the letters of SCORE, BALLS, WARNING, TILT and BONUS, X), each font pixel a ``scale`` x
+    ``scale`` block."""
     rows = []
     for row in range(5):
         bits = []
@@ -42,17 +44,22 @@ def scoreboard(
     tilt_warnings: int = 0,
     allowed_warnings: int = 0,
     tilted: bool = False,
+    bonus: int | None = None,
+    multiplier: int = 1,
 ) -> np.ndarray:
     """A (height, width, 3) uint8 strip showing the score and the balls left, as a machine's
     display does beside the playfield; below them, on a table with the cabinet, ``TILT`` while
     ``tilted``, else ``WARNING`` and ``tilt_warnings``/``allowed_warnings`` while a warning
-    stands (nothing when none does, so that a table without a cabinet is drawn as before)."""
+    stands (nothing when none does, so that a table without a cabinet is drawn as before); on a
+    table with rules (``bonus`` given) ``BONUS``, the bonus and ``X`` the multiplier."""
     strip = np.empty((height, width, 3), dtype=np.uint8)
     strip[...] = BACKGROUND
     sections: list[tuple[str, str | None, Colour]] = [
         ("SCORE", str(int(score)), SCOREBOARD_TEXT),
         ("BALLS", str(int(balls_left)), SCOREBOARD_TEXT),
     ]
+    if bonus is not None:
+        sections.append(("BONUS", f"{int(bonus)} X{int(multiplier)}", SCOREBOARD_TEXT))
     if tilted:
         sections.append(("TILT", None, SCOREBOARD_ALERT))
     elif tilt_warnings > 0:

@@ -98,6 +98,7 @@ class World:
         self.flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
         self._everyone = np.ones(n_envs, dtype=bool)  # the kernel's mask that steps every env
         for env in range(n_envs):
+            self.reset_targets(env)
             self.rest_flippers(env)
             self.place_ball(env, table.ball.start, table.ball.velocity)
 
