@@ -116,3 +116,17 @@ def test_pinball_v1_on_pymunk_moves_the_cabinet_as_the_kernel_does():
         swept, pymunk = (envs[p].unwrapped.game.world.state.cabinet for p in cc.ENGINES)
         assert np.array_equal(swept, pymunk)
     assert tilted == {"swept": True, "pymunk": True}
+
+
+def test_drop_targets_and_spinners_agree_with_pymunk():
+    """A drop target bounces a ball as a wall does (analytic), falls, and lets the next through,
+    on both engines; a spinner counts the same revolutions on both."""
+    drops = cc.target_hits([0.5, 2.0])
+    for row in drops:
+        for engine in cc.ENGINES:
+            assert cc.agrees(row, engine, row["speed"]), (row, engine)
+            assert row[engine]["fell"] and row[engine]["passed_when_down"]
+    turns = cc.spinner_turns([1.0, 4.0])
+    assert turns[0]["swept"] < turns[1]["swept"]
+    for row in turns:
+        assert abs(row["swept"] - row["pymunk"]) <= 1

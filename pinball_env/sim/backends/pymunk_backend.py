@@ -22,7 +22,13 @@ instead of the swept kernel: one ``pymunk.Space`` per env, built from the same v
   :func:`~pinball_env.physics.cabinet.cabinet_substep`, and the ball, simulated relative to the
   cabinet as in the kernel, feels its acceleration ``-dv / h`` beside gravity (the space's
   gravity for that substep: the ball is the space's only dynamic body); a tilted machine's
-  kickers are dead (``state.tilted``), as in the kernel.
+  kickers are dead (``state.tilted``), as in the kernel;
+- targets (a table with them) are the kernel's too: a drop target is a static segment that
+  stops being processed once it has fallen (``state.targets_up``), dropping at the end of the
+  substep that hit it; spinner and kickback lines are the kernel's crossing tests on the ball
+  centre's path over each substep (a lit kickback puts the ball at its line at the kick
+  velocity), and the frame ends with the kernel's ``update_targets`` (spinners turn, banks
+  rise).
 
 What pymunk does not have, and the cross-check measures: continuous collision (it finds overlaps
 after they happen, so a fast ball can pass through a thin wall or a flipper within one substep),
@@ -48,17 +54,24 @@ from pinball_env.physics.columns import (
     BALL_X,
     BALL_Y,
     BOB_TOUCHES,
+    KICKBACK_VX,
+    KICKBACK_VY,
     PROP_FRICTION,
     PROP_KICK,
     PROP_RESTITUTION,
 )
+from pinball_env.physics.data import first_drop_target, first_kickback
 from pinball_env.physics.step import (
+    count_kickbacks,
     flipper_end,
     flipper_motion,
     is_hit,
+    kickback_crossing,
     log_contact,
     record_crossings,
+    sensor_crossing,
 )
+from pinball_env.physics.targets import spin_spinner, update_targets
 from pinball_env.sim.world import World
 from pinball_env.table import Table
 
@@ -112,6 +125,7 @@ class _EnvSpace:
         self.time = 0.0  # seconds since the start of the frame, for the contact log
         self.pending_kicks: list[tuple[float, float, float]] = []
         self.kick_scale = 1.0  # 0 while the machine is tilted (its kickers dead)
+        self.pending_drops: list[int] = []  # drop targets hit in the substep under way
 
         static = space.static_body
         for element, (x0, y0, x1, y1) in enumerate(geometry.segments):
@@ -123,6 +137,10 @@ class _EnvSpace:
         for j, (x, y, radius) in enumerate(geometry.circles):
             shape = pymunk.Circle(static, radius, offset=(x, y))
             self._add_element(shape, first_circle(geometry) + j, geometry.circle_props[j])
+        for j, (x0, y0, x1, y1) in enumerate(geometry.drop_targets):
+            shape = pymunk.Segment(static, (x0, y0), (x1, y1), 0.0)
+            self._add_element(shape, first_drop_target(geometry) + j, geometry.drop_target_props[j])
+            shape.drop_target = j
         self.flipper_bodies = []
         for j, flipper in enumerate(table.flippers):
             body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
@@ -149,6 +167,7 @@ class _EnvSpace:
         shape.kick = float(props[PROP_KICK])
         shape.element = element
         shape.one_sided = False
+        shape.drop_target = -1  # else the index of the drop target it is
         self.space.add(shape)
 
     # --- collision callbacks ------------------------------------------------------------------
@@ -161,7 +180,9 @@ class _EnvSpace:
 
     def _pre_solve(self, arbiter: "pymunk.Arbiter", space: "pymunk.Space", data: Any) -> None:
         other, _, _ = self._other(arbiter)
-        if other.one_sided:
+        if other.drop_target >= 0 and not self.world.state.targets_up[self.env, other.drop_target]:
+            arbiter.process_collision = False  # fallen: no contact
+        elif other.one_sided:
             # Behind a one-sided segment (the side its normal does not point to): pass through.
             cx, cy = self.ball.position
             ax, ay = other.anchor
@@ -170,7 +191,7 @@ class _EnvSpace:
 
     def _begin(self, arbiter: "pymunk.Arbiter", space: "pymunk.Space", data: Any) -> None:
         other, nx, ny = self._other(arbiter)
-        if other.one_sided:
+        if other.one_sided or other.drop_target >= 0:
             self._pre_solve(arbiter, space, data)
             if not arbiter.process_collision:
                 return
@@ -184,6 +205,8 @@ class _EnvSpace:
         log_contact(state, self.env, other.element, self.time, speed)
         if is_hit(speed, kick, self.world.settings.resting_speed):
             state.hits[self.env, other.element] += 1
+            if other.drop_target >= 0:
+                self.pending_drops.append(other.drop_target)
         if kick > 0.0:
             self.pending_kicks.append((kick, nx, ny))
 
@@ -225,17 +248,58 @@ class _EnvSpace:
             for kick, nx, ny in self.pending_kicks:
                 self.ball.velocity += (kick * nx, kick * ny)
             self.pending_kicks.clear()
+            for j in self.pending_drops:  # they fall at the end of the substep, as the kernel's
+                state.targets_up[env, j] = False
+            self.pending_drops.clear()
             if space_before:
                 self._cross_sensors(before)
         self._sync_ball_out()
+        if world.table.has_targets:
+            ball = state.balls[env]
+            update_targets(geometry, state, env, ball[BALL_X], ball[BALL_Y],
+                           world.table.ball.radius, settings.dt)  # fmt: skip
 
     def _cross_sensors(self, before: "pymunk.Vec2d") -> None:
         """The kernel's sensor bookkeeping on the ball's move over the substep just stepped;
         a drained ball leaves the space where it crossed the drain."""
         world, env = self.world, self.env
+        geometry, state = world.geometry, world.state
         after = self.ball.position
         dx, dy = after.x - before.x, after.y - before.y
         h = world.settings.dt / world.settings.substeps
+        vx, vy = dx / h, dy / h  # the move's mean velocity
+        kicked, u = -1, math.inf
+        if geometry.kickbacks.shape[0] > 0:
+            lit = state.kickback_lit[env]
+            kicked, u = kickback_crossing(before.x, before.y, vx, vy, h, geometry.kickbacks, lit)
+            if kicked >= 0:  # the move ends at the line, whence the ball leaves at the kick
+                dx, dy = dx * u, dy * u
+            count_kickbacks(
+                state,
+                env,
+                before.x,
+                before.y,
+                vx,
+                vy,
+                h * min(u, 1.0),
+                geometry.kickbacks,
+                lit,
+                first_kickback(geometry),
+                self.time + h,
+            )
+        for j in range(geometry.spinners.shape[0]):
+            crossing = sensor_crossing(before.x, before.y, dx, dy, geometry.spinners[j])
+            if crossing < math.inf:
+                spin_spinner(geometry.spinners[j], state.spinners[env, j], vx, vy,
+                             self.time + crossing * h)  # fmt: skip
+        if kicked >= 0:
+            kick = geometry.kickbacks[kicked]
+            state.hits[env, first_kickback(geometry) + kicked] += 1
+            log_contact(state, env, first_kickback(geometry) + kicked, self.time + u * h, 0.0)
+            state.kickback_lit[env, kicked] = False
+            self.ball.position = (before.x + dx, before.y + dy)
+            self.ball.velocity = (kick[KICKBACK_VX], kick[KICKBACK_VY])
+            self.ball.angular_velocity = 0.0
         drain = record_crossings(
             world.state, env, world.geometry, before.x, before.y, dx, dy, self.time, h,
             world.scratch.crossings[env],
