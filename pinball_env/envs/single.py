@@ -112,7 +112,23 @@ class PinballEnv(CoreAttributes, gym.Env):
     | 17    | tilted (1) or not (0)                         | 0     | 1     | -     |
 
     (the pull's maximum is the table's stroke, in strokes (0-1) for generated tables; the
-    warnings' is the table's allowed warnings + 1). ``rays`` come after these rows.
+    warnings' is the table's allowed warnings + 1).
+
+    With rules (a table with a ``rules`` section: ``Pinball-v1``), more rows (29 in all on
+    ``classic_v1``): each of the rules' lights, drop targets and kickbacks, each timer's share
+    of its time left, each counter, the bonus multiplier and the bonus:
+
+    | Index | Observation (``classic_v1``)                  | Min   | Max   | Unit   |
+    |-------|-----------------------------------------------|-------|-------|--------|
+    | 18-20 | lights ``lane_1_lit`` to ``lane_3_lit`` (1 lit)| 0     | 1     | -      |
+    | 21-23 | drop targets ``drop_1`` to ``drop_3`` (1 up)   | 0     | 1     | -      |
+    | 24    | kickback ``left_kickback`` lit (1)            | 0     | 1     | -      |
+    | 25    | ``bumper_frenzy``'s time left, of its 20 s    | 0     | 1     | -      |
+    | 26    | counter ``banks_down`` (clipped to 100)       | 0     | 100   | -      |
+    | 27    | bonus multiplier                              | 1     | 5     | x      |
+    | 28    | end-of-ball bonus (clipped to 100)            | 0     | 100   | 1000 points |
+
+    ``rays`` come after these rows.
 
     ``obs_type="rgb"``: a ``Box(0, 255, (84, 84, 3), uint8)`` picture of the whole table (stretched
     to the image), drawn without a display; ``obs_type="grayscale"``: the same as
@@ -122,10 +138,12 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     The points of the step's scoring events times ``reward_scale`` (default 0.01): a pop bumper
     is 100 points (reward 1), a slingshot or a rollover 10 (0.1); on ``classic_v1`` the skill
-    shot 1000 (10). A tilted machine scores nothing. Optional shaping, off by
-    default: ``height_shaping`` times the rise of the ball during the step in table heights (a
-    potential, so it sums to ``height_shaping`` times the net rise of each ball, from its launch
-    to where it drains); ``drain_penalty`` taken off for each ball that drains.
+    shot 1000 (10); with rules, the points the rules award, and the end-of-ball bonus times
+    its multiplier where a ball is lost. A tilted machine scores nothing. Optional shaping, off
+    by default: ``height_shaping`` times the rise of the ball during the step in table heights
+    (a potential, so it sums to ``height_shaping`` times the net rise of each ball, from its
+    launch to where it drains); ``drain_penalty`` taken off for each ball that drains;
+    ``bonus_shaping`` pays the end-of-ball bonus's reward as it is earned.
 
     ## Starting State
 
@@ -172,6 +190,22 @@ class PinballEnv(CoreAttributes, gym.Env):
     ``info`` adds ``tilt_warnings``, ``tilted`` (the machine is tilted, or tilted in this
     step), ``ball_on_plunger``, ``plunger_pull`` [m], ``cabinet_offset`` [m] and ``skill_shot``
     (made in this step).
+
+    **Rules and targets** (``Pinball-v1``; any table with ``drop_targets``, ``standup_targets``,
+    ``spinners``, ``kickbacks``, ``ball_save`` or ``rules``, see ``pinball_env.table.rules``).
+    On ``classic_v1``: the top lanes ``lane_1`` to ``lane_3`` light when rolled over (100 to the
+    bonus); each flipper press passes the lit lanes one place to the right (lane change); all
+    three lit raise the bonus multiplier (x2 to x5) and score 500. The drop bank (three targets
+    on the right, 100 each and 200 to the bonus) rises 1 s after its last target falls; the
+    whole bank scores 1000, doubles the pop bumpers for 20 s (``bumper_frenzy``) and lights the
+    kickback in the left outlane, which fires the next ball that reaches it back into play and
+    goes dark; every third bank is an extra ball. The spinner on the left orbit scores 10 a
+    revolution (and 20 to the bonus), the stand-up target 200 (and 500 to the bonus). A ball
+    lost scores the bonus times the multiplier (nothing on a tilt); both then start again. A
+    ball that drains within 6 s of its launch is served again, once per ball (ball save).
+    ``info`` adds ``rule_events`` (rule name -> times it fired this step; ``"ball saved"`` and
+    ``"end-of-ball bonus"`` too), ``bonus`` [points], ``bonus_multiplier`` and ``rule_score``
+    (points the rules scored this game; the rest came from hits).
 
     ## Generated tables (``PinballProcgen-v0``)
 
@@ -257,7 +291,10 @@ class PinballEnv(CoreAttributes, gym.Env):
     ## Version History
 
     - v1: the whole cabinet on ``classic_v1`` (the classic layout): the player's plunger and a
-      skill shot, the nudge, the plumb-bob tilt; 32 actions. (``gym.make("Pinball-v0")`` now
+      skill shot, the nudge, the plumb-bob tilt; 32 actions. Then rules and targets on
+      ``classic_v1`` (top lanes with lane change and the bonus multiplier, a drop bank, a
+      spinner, a stand-up, a kickback, ball save; the observation's rule rows, 29 in all),
+      which changed v1's games and scores. (``gym.make("Pinball-v0")`` now
       says that v1 exists, as Gymnasium does for every older version; v0's games are bitwise
       unchanged.)
     - v0: first release: swept collision against walls, posts and rotating flippers.

@@ -93,7 +93,11 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
     Gymnasium's ``RecordEpisodeStatistics``). In SAME_STEP mode,
     ``final_obs`` (an object array) and ``final_info`` (arrays with their own ``_key`` masks)
     hold the ended envs' last observation and info, as ``SyncVectorEnv`` does. The per-step
-    ``events`` of the single env are not batched.
+    ``events`` of the single env are not batched. With the cabinet, its entries (N,); with
+    rules, ``bonus``, ``bonus_multiplier``, ``rule_score`` (N,) and ``rule_events`` (N, R + 2)
+    counts of each rule fired this step, in the order of the attribute ``event_names`` of the
+    game (``env.unwrapped.game.event_names``: the rules, then the ball save and the end-of-ball
+    bonus).
 
     ## Seeding and resets
 
