@@ -420,3 +420,29 @@ def test_the_env_frames_show_the_cabinet() -> None:
         else:
             assert alert == 0
     assert seen == {"warning", "tilt"}
+
+
+def test_the_renderer_draws_lamps_and_fallen_targets():
+    import gymnasium as gym
+
+    from pinball_env.render.colours import LIGHT_OFF, LIGHT_ON, TARGET, TARGET_DOWN
+
+    env = gym.make("Pinball-v1", render_mode="rgb_array").unwrapped
+    env.reset(seed=0)
+    table = env.game.table
+    renderer = env.core.frame_renderers(table)
+    sx, sy = renderer.width / table.width, renderer.height / table.height
+
+    def pixel(frame, x, y):
+        row = renderer.top + int((table.height - y) * sy)
+        return tuple(frame[row, renderer.left + int(x * sx)])
+
+    light = table.rules.lights[0].at
+    target = table.drop_target_list[1].segment
+    middle = (0.5 * (target[0] + target[2]), 0.5 * (target[1] + target[3]))
+    frame = env.render()
+    assert pixel(frame, *light) == LIGHT_OFF and pixel(frame, *middle) == TARGET
+    env.game.state.lights[0, 0] = True
+    env.game.world.state.targets_up[0, 1] = False
+    frame = env.render()
+    assert pixel(frame, *light) == LIGHT_ON and pixel(frame, *middle) == TARGET_DOWN

@@ -319,3 +319,26 @@ def test_compile_rules_resolves_names_to_ids(classic):
     assert frenzy == ["bumper_left", "bumper_right", "bumper_bottom"]
     assert book.save_frames == 360 and book.max_multiplier == 5
     assert names[book.first_target] == "drop_1"
+
+
+def test_bonus_shaping_pays_the_bonus_as_earned_and_sums_to_the_score():
+    """With bonus_shaping 1 (and no other shaping) a game's rewards add up to its score times
+    reward_scale, as without; the bonus's reward comes where it is earned, not at the drain."""
+    import gymnasium as gym
+
+    totals = {}
+    for shaping in (0.0, 1.0):
+        env = gym.make("Pinball-v1", bonus_shaping=shaping, max_episode_steps=None)
+        env.reset(seed=5)
+        rng = np.random.default_rng(5)
+        total, at_drains, done = 0.0, 0.0, False
+        while not done:
+            _, reward, terminated, truncated, info = env.step(int(rng.integers(0, 8)))
+            total += reward
+            if info["rule_events"].get(BONUS_SCORED):
+                at_drains += reward
+            done = terminated or truncated
+        assert total == pytest.approx(info["score"] * 0.01, abs=1e-6)
+        totals[shaping] = (info["score"], at_drains)
+    assert totals[0.0][0] == totals[1.0][0]  # the same game: shaping changes rewards only
+    assert totals[1.0][1] < totals[0.0][1]  # the bonus was paid before the drains

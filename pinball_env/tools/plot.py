@@ -7,6 +7,7 @@ Examples::
     python -m pinball_env.tools.plot procgen:7 --out outputs/procgen7.png
     python -m pinball_env.tools.plot --gallery --difficulty hard --seeds 0 12 --out gallery.png
     python -m pinball_env.tools.plot classic_v1 --cabinet --out docs/cabinet.png
+    python -m pinball_env.tools.plot classic_v1 --rules --out docs/rules.png
 
 Needs matplotlib (the ``plot`` extra).
 """
@@ -160,6 +161,63 @@ def plot_gallery(tables: list[Table], out: Path, columns: int = 6) -> Path:
     return out
 
 
+def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
+    """Write a PNG of a heuristic game on ``table`` (one with rules): the table as the renderer
+    draws it where the most of its lamps and fallen targets show, and the score over the game,
+    the points of the rules (modes, awards, end-of-ball bonuses) apart from the hits'."""
+    if table.rules is None:
+        raise ValueError(f"table {table.name!r} has no rules")
+    from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
+    from pinball_env.heuristic import HeuristicPolicy
+
+    plt = _pyplot()
+    env = PinballEnv(table=table, render_mode="rgb_array")
+    policy = HeuristicPolicy(table)
+    _, info = env.reset(seed=seed)
+    rate = table.simulation.frame_rate
+    times, scores, rule_scores, multipliers = [], [], [], []
+    best, frame = -1, None
+    done = False
+    while not done:
+        _, _, terminated, truncated, info = env.step(policy(info))
+        done = terminated or truncated
+        times.append(info["frames"] / rate)
+        scores.append(info["score"])
+        rule_scores.append(info["rule_score"])
+        multipliers.append(info["bonus_multiplier"])
+        world = env.game.world.state
+        shown = env.game.state.lights[0].sum() + (~world.targets_up[0]).sum()
+        shown += world.kickback_lit[0].sum() + info["bonus_multiplier"]
+        if shown > best and env.game.world.state.active[0]:
+            best, frame = shown, env.render()
+    fig = plt.figure(figsize=(10, 6.2))
+    grid = fig.add_gridspec(1, 2, width_ratios=(1, 1.5))
+    ax = fig.add_subplot(grid[0, 0])
+    ax.imshow(frame)
+    ax.set_axis_off()
+    ax.set_title("lamps lit, targets down, the bonus and its multiplier", fontsize=9)
+    ax = fig.add_subplot(grid[0, 1])
+    scores, rule_scores = np.array(scores), np.array(rule_scores)
+    ax.plot(times, scores, color="#1d3557", label="score")
+    ax.plot(times, scores - rule_scores, color="#2a9d8f", label="from hits")
+    ax.plot(times, rule_scores, color="#e76f51", label="from the rules (modes, awards, bonus)")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("points")
+    ax.legend(fontsize=8, loc="upper left")
+    twin = ax.twinx()
+    twin.step(times, multipliers, color="#f4a261", lw=0.8, where="post", alpha=0.7)
+    twin.set_ylabel("bonus multiplier", color="#f4a261")
+    twin.set_ylim(0.5, table.rules.max_multiplier + 0.5)
+    ax.set_title(f"the heuristic's game (seed {seed}): {scores[-1]} points, "
+                 f"{rule_scores[-1]} from the rules", fontsize=9)  # fmt: skip
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    env.close()
+    return out
+
+
 def plot_cabinet(table: Table, out: Path) -> Path:
     """Write a PNG of the cabinet at work on ``table`` (one with a cabinet): the skill shot's
     plunge beside a whole stroke, one nudge (the cabinet's offset and the ball's velocity
@@ -256,6 +314,9 @@ def main(argv: list[str] | None = None) -> Path:
         "--cabinet", action="store_true", help="the plunger, a nudge and the tilt at work"
     )
     parser.add_argument(
+        "--rules", action="store_true", help="a heuristic game: the rules' lights and score"
+    )
+    parser.add_argument(
         "--difficulty", choices=DIFFICULTIES, default="easy", help="of the gallery's tables"
     )
     parser.add_argument(
@@ -269,6 +330,10 @@ def main(argv: list[str] | None = None) -> Path:
             parser.error(f"--seeds needs FIRST >= 0 and COUNT >= 1, got {first} {count}")
         tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
         out = plot_gallery(tables, args.out, columns=min(count, 6))
+        print(f"wrote {out}")
+        return out
+    if args.rules:
+        out = plot_rules(load_any_table(args.table), args.out)
         print(f"wrote {out}")
         return out
     if args.cabinet:
