@@ -389,7 +389,7 @@ def test_the_action_set_as_ale_names_it():
 def test_spaces_of_pinball_v1():
     env = gym.make("Pinball-v1")
     assert env.action_space == gym.spaces.Discrete(32)
-    assert env.observation_space.shape == (18,)
+    assert env.observation_space.shape == (29,)  # 18 with the cabinet, 11 more for the rules
     multi = gym.make("Pinball-v1", action_type="multibinary")
     assert multi.action_space == gym.spaces.MultiBinary(6)
 

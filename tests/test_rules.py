@@ -342,3 +342,10 @@ def test_bonus_shaping_pays_the_bonus_as_earned_and_sums_to_the_score():
         totals[shaping] = (info["score"], at_drains)
     assert totals[0.0][0] == totals[1.0][0]  # the same game: shaping changes rewards only
     assert totals[1.0][1] < totals[0.0][1]  # the bonus was paid before the drains
+
+
+def test_every_env_of_a_game_plays_the_same_rules(classic):
+    game = Game(classic, n_envs=2)
+    other = with_rules(classic, max_multiplier=3)
+    with pytest.raises(ValueError, match="other rules or ball save"):
+        game.set_table(1, other)

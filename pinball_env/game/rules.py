@@ -190,19 +190,20 @@ class Game:
                 f"{self.table.name!r}: every env of a game needs the same"
             )
         # The step loop reads the cabinet's numbers, the player's plunger's among them, once.
-        if (table.rules, table.ball_save) != (self.table.rules, self.table.ball_save) or (
-            table.rules is not None and table.element_names != self.table.element_names
-        ):
-            raise ValueError(
-                f"table {table.name!r} has other rules or ball save than {self.table.name!r}: "
-                "every env of a game needs the same"
-            )
         cabinet = (table.cabinet, table.tilt, table.plunger if table.has_cabinet else None)
         if cabinet != (self.table.cabinet, self.table.tilt, self.table.plunger if self.cabinet
                        else None):  # fmt: skip
             raise ValueError(
                 f"table {table.name!r} has another cabinet, tilt or player's plunger than "
                 f"{self.table.name!r}: every env of a game needs the same"
+            )
+        # The rules are compiled once per game, on element ids.
+        if (table.rules, table.ball_save) != (self.table.rules, self.table.ball_save) or (
+            table.rules is not None and table.element_names != self.table.element_names
+        ):
+            raise ValueError(
+                f"table {table.name!r} has other rules or ball save than {self.table.name!r}: "
+                "every env of a game needs the same"
             )
         self.world.set_table(env, table)
         self.state = self.state._replace(world=self.world.state)  # it may have grown
