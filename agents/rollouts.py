@@ -18,7 +18,7 @@ from pinball_env.heuristic import HeuristicPolicy
 
 BASELINES = ("random", "heuristic")
 # The baselines play frame by frame, on the model's table (or layouts) with the default rewards.
-BASELINE_KWARGS = ("table", "balls", "num_layouts", "start_layout", "difficulty")
+BASELINE_KWARGS = ("table", "balls", "num_layouts", "start_layout", "difficulty", "targets")
 
 # A policy over a VecEnv: (observations, infos) -> actions.
 VecPolicy = Callable[[np.ndarray, list[dict[str, Any]]], np.ndarray]

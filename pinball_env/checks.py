@@ -49,6 +49,13 @@ def fraction(name: str, value: object) -> float:
     return float(value)
 
 
+def flag(name: str, value: object) -> bool:
+    """``value`` as a bool, if it is True or False (Python's or NumPy's)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
 def choice(name: str, value: object, choices: Sequence[object]) -> None:
     """Nothing, if ``value`` is one of ``choices``."""
     if value not in choices:

@@ -27,8 +27,8 @@ MAX_EPISODE_STEPS = GAME_FRAMES
 MAX_FRAME_SKIP = 60
 # Rays a state observation may carry (see ``rays``).
 MAX_RAYS = 64
-# The table source that draws a generated table at every game (num_layouts, start_layout and
-# difficulty say which).
+# The table source that draws a generated table at every game (num_layouts, start_layout,
+# difficulty and targets say which).
 GENERATED = "generated"
 OBS_TYPES = ("state", "rgb", "grayscale")
 ACTION_TYPES = ("discrete", "multibinary")
@@ -37,7 +37,7 @@ RENDER_MODES = ("human", "rgb_array")
 from pinball_env.procgen import DIFFICULTIES  # noqa: E402
 
 # The options that only the generated-table source takes.
-LAYOUT_OPTIONS = ("num_layouts", "start_layout", "difficulty")
+LAYOUT_OPTIONS = ("num_layouts", "start_layout", "difficulty", "targets")
 
 
 def _option(default: Any, check: Callable[[str, Any], Any] | None = None) -> Any:
@@ -164,6 +164,9 @@ class PinballOptions(_Checked):
     """Generated tables: the first layout's seed."""
     difficulty: str = _option("easy", _choice(*DIFFICULTIES))
     """Generated tables: ``"easy"`` or ``"hard"`` layouts."""
+    targets: bool = _option(False, checks.flag)
+    """Generated tables get a drop bank and a spinner (PinballProcgen-v0's tables; False keeps
+    them as they were)."""
     rays: int = _option(0, _rays)
     """Ray distances from the ball appended to the state observation (0-64, 0: none)."""
 

@@ -139,7 +139,7 @@ def test_tables_by_name():
     assert load_any_table("procgen:12") == generate_table(12)
     assert load_any_table("procgen-hard:12") == generate_table(12, "hard")
     assert load_any_table("classic") == load_table("classic")
-    assert parse_name("procgen-hard:5") == (5, "hard")
+    assert parse_name("procgen-hard:5") == (5, "hard", False)
     assert parse_name("classic") is None
     env = gym.make("Pinball-v0", table="procgen-hard:2")
     env.reset(seed=0)

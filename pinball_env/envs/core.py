@@ -43,7 +43,9 @@ class PinballCore:
         self.layouts: Layouts | None = None
         self.layout: np.ndarray | None = None
         if options.generated:
-            self.layouts = Layouts(options.num_layouts, options.start_layout, options.difficulty)
+            self.layouts = Layouts(
+                options.num_layouts, options.start_layout, options.difficulty, options.targets
+            )
             table = self.layouts.table(self.layouts.start)
             self.layout = np.full(n_envs, self.layouts.start, dtype=np.int64)
         elif isinstance(options.table, Table):

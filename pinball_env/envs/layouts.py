@@ -34,10 +34,15 @@ PROGRESS_AFTER = 2.0
 PROGRESS_EVERY = 1.0
 
 
+def layout_table(seed: int, difficulty: str, targets: bool = False) -> Table:
+    """The generated table of a layout (``generate_table``, cached: the same object for the
+    same arguments, however they are passed)."""
+    return _cached_table(seed, difficulty, bool(targets))
+
+
 @functools.lru_cache(maxsize=CACHED_TABLES)
-def layout_table(seed: int, difficulty: str) -> Table:
-    """The generated table of a layout (``generate_table``, cached)."""
-    return generate_table(seed, difficulty)
+def _cached_table(seed: int, difficulty: str, targets: bool) -> Table:
+    return generate_table(seed, difficulty, targets)
 
 
 def frame_size(difficulty: str) -> tuple[int, int]:
@@ -52,18 +57,20 @@ def frame_size(difficulty: str) -> tuple[int, int]:
 
 
 class Layouts:
-    """The layouts an env plays, seeds ``[start, start + count)`` (``count`` 0: unlimited), and
-    the making of their tables, which belongs to the env: the table of each env's next game is
-    generated on a thread in the background while this one is played, and tables needed at
-    once (a reset's) on ``GENERATION_THREADS`` threads. Fork-safe: a forked child has none of
-    its parent's threads, so it forgets the work pending there and starts its own threads.
-    Which layouts are drawn does not depend on any of this."""
+    """The layouts an env plays, seeds ``[start, start + count)`` (``count`` 0: unlimited), of
+    ``difficulty``, with a drop bank and a spinner if ``targets``, and the making of their
+    tables, which belongs to the env: the table of each env's next game is generated on a
+    thread in the background while this one is played, and tables needed at once (a reset's)
+    on ``GENERATION_THREADS`` threads. Fork-safe: a forked child has none of its parent's
+    threads, so it forgets the work pending there and starts its own threads. Which layouts are
+    drawn does not depend on any of this."""
 
-    def __init__(self, count: int, start: int, difficulty: str) -> None:
+    def __init__(self, count: int, start: int, difficulty: str, targets: bool = False) -> None:
         self.count = checks.integer("num_layouts", count, 0)
         self.start = checks.integer("start_layout", start, 0)
         checks.choice("difficulty", difficulty, DIFFICULTIES)
         self.difficulty = difficulty
+        self.targets = checks.flag("targets", targets)
         self._upcoming: dict[int, int] = {}  # env -> the layout of its next game
         self._to_prefetch: list[int] = []  # upcoming layouts not yet sent to the prefetcher
         self._pending: dict[int, Future[Table]] = {}  # layout -> its table, being generated
@@ -129,14 +136,16 @@ class Layouts:
                 missing.append(layout)
         tables = {}
         if len(missing) == 1:
-            tables[missing[0]] = layout_table(missing[0], self.difficulty)
+            tables[missing[0]] = layout_table(missing[0], self.difficulty, self.targets)
         elif missing:
             if self._generators is None:
                 self._generators = ThreadPoolExecutor(
                     GENERATION_THREADS, thread_name_prefix="pinball-tables"
                 )
             for layout in missing:
-                futures[layout] = self._generators.submit(layout_table, layout, self.difficulty)
+                futures[layout] = self._generators.submit(
+                    layout_table, layout, self.difficulty, self.targets
+                )
         tables.update(self._wait(futures))
         self._prefetch()
         return tables
@@ -159,7 +168,8 @@ class Layouts:
             last = done == len(futures)
             if now - start >= PROGRESS_AFTER and (last or now - shown >= PROGRESS_EVERY):
                 shown = now
-                line = f"generating {len(futures)} {self.difficulty} tables: {done}/{len(futures)}"
+                kind = f"{self.difficulty} tables{' with targets' if self.targets else ''}"
+                line = f"generating {len(futures)} {kind}: {done}/{len(futures)}"
                 tty = sys.stderr.isatty()  # a terminal's line is rewritten, a log gets lines
                 end = "\n" if last or not tty else ""
                 print(f"\r{line}" if tty else line, end=end, file=sys.stderr, flush=True)
@@ -172,7 +182,7 @@ class Layouts:
                 if self._prefetcher is None:
                     self._prefetcher = ThreadPoolExecutor(1, thread_name_prefix="pinball-layouts")
                 self._pending[layout] = self._prefetcher.submit(
-                    layout_table, layout, self.difficulty
+                    layout_table, layout, self.difficulty, self.targets
                 )
         self._to_prefetch.clear()
 

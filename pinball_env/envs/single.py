@@ -238,7 +238,8 @@ class PinballEnv(CoreAttributes, gym.Env):
              reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, bonus_shaping=0.0,
              frame_skip=1,
              skip_above=0.0, max_frames=None, image_size=(84, 84), physics="swept",
-             render_mode=None, num_layouts=0, start_layout=0, difficulty="easy", rays=0)
+             render_mode=None, num_layouts=0, start_layout=0, difficulty="easy", targets=False,
+             rays=0)
     gym.make("PinballProcgen-v0", num_layouts=16, ...)  # table="generated", the rest the same
     ```
 
@@ -276,8 +277,10 @@ class PinballEnv(CoreAttributes, gym.Env):
     - ``image_size``: (height, width) of image observations, in pixels, or one int for a square.
     - ``physics``: ``"swept"`` (ours, continuous collision) or ``"pymunk"`` (the same table in
       pymunk, for cross-checks, on a fixed table; needs the ``crosscheck`` extra).
-    - ``num_layouts``, ``start_layout``, ``difficulty``: the layouts of ``table="generated"``
-      (an error with any other table).
+    - ``num_layouts``, ``start_layout``, ``difficulty``, ``targets``: the layouts of
+      ``table="generated"`` (an error with any other table); ``targets=True``: generated tables
+      get a drop bank and a spinner (``"procgen+targets:SEED"``; the observation keeps its
+      shape; False keeps the tables as they were).
     - ``rays``: ray distances after the state observation (0-64).
     - ``render_mode``: ``"human"`` (a pygame window at real speed, frame rate over
       ``frame_skip`` steps per second, needs the ``render`` extra; ``metadata["render_fps"]`` is

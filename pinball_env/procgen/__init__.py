@@ -1,10 +1,12 @@
 """Generated tables: endless playable layouts, each drawn from a seed.
 
-``generate_table(seed, difficulty)`` draws a table in the proportions of real machines (Procgen's
-idea, for pinball): playfield size and slope, the top arch, the shooter lane and its gate, the
-flippers, outlanes and inlanes, slingshots, and a varying number and placement of pop bumpers,
-rubber posts, deflector walls (some one-way), upper deflectors and top rollover lanes. The same
-seed gives the same table on any machine (NumPy's ``SeedSequence`` and ``PCG64`` are specified,
+``generate_table(seed, difficulty, targets=False)`` draws a table in the proportions of real
+machines (Procgen's idea, for pinball): playfield size and slope, the top arch, the shooter lane
+and its gate, the flippers, outlanes and inlanes, slingshots, and a varying number and placement
+of pop bumpers, rubber posts, deflector walls (some one-way), upper deflectors and top rollover
+lanes; with ``targets=True`` also a drop bank (2-4 targets facing the flippers) and a spinner,
+drawn from a random stream of their own, so that the tables without them stay as they were. The
+same seed gives the same table on any machine (NumPy's ``SeedSequence`` and ``PCG64`` are specified,
 and every length is rounded to 0.01 mm).
 
 A drawn layout is kept only if it passes ``load_table``'s validation and :func:`playability`
@@ -15,10 +17,11 @@ gap lets a ball through. A layout that fails is redrawn from the next derived se
 says how many draws it took and why each was rejected. ``"easy"`` tables are forgiving (long
 flippers, a narrow centre gap, narrow outlanes, upper deflectors); ``"hard"`` ones are not.
 
-- ``names.py``: the difficulties, seeds and names (``"procgen:SEED"``, ``"procgen-hard:SEED"``);
+- ``names.py``: the difficulties, seeds and names (``"procgen:SEED"``, ``"procgen-hard:SEED"``,
+  ``"procgen+targets:SEED"``, ``"procgen-hard+targets:SEED"``);
 - ``ranges.py``: what each difficulty draws from;
 - ``obstacles.py``: rounded lengths, and the clearance between placed elements;
-- ``layout.py``: :func:`draw_layout`, the layout drawn element by element;
+- ``layout.py``: :func:`draw_layout`, the layout drawn element by element (and the targets);
 - ``playability.py``: :func:`playability`, the check on the kernel;
 - ``generate.py``: :func:`generate` and :func:`generate_table`, draws until one plays.
 
@@ -49,6 +52,8 @@ from pinball_env.procgen.names import (
     MAX_SEED,
     NAME_PATTERN,
     PREFIXES,
+    TARGETS_SUFFIX,
+    name_prefix,
     parse_name,
     table_name,
 )
@@ -69,8 +74,9 @@ from pinball_env.table import load_any_table, register_generator
 
 _Obstacles = Obstacles  # the name the tests knew
 
-for _prefix in PREFIXES.values():
-    register_generator(_prefix, table_by_name)
+for _difficulty in DIFFICULTIES:
+    for _targets in (False, True):
+        register_generator(name_prefix(_difficulty, _targets), table_by_name)
 
 __all__ = [
     "BALL_RADIUS",
@@ -93,6 +99,7 @@ __all__ = [
     "REST_TIME",
     "SLING_HEIGHTS",
     "SLING_SPEEDS",
+    "TARGETS_SUFFIX",
     "Generated",
     "LayoutError",
     "Obstacles",
@@ -101,6 +108,7 @@ __all__ = [
     "generate",
     "generate_table",
     "load_any_table",
+    "name_prefix",
     "parse_name",
     "playability",
     "table_by_name",

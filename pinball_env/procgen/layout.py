@@ -1,10 +1,12 @@
 """Drawing a layout from a seed's random stream, element by element: the cabinet and its arch,
 the shooter lane, the flippers, the outlanes, inlanes and slingshots, the upper deflectors, the
-top rollover lanes, the pop bumpers, the rubber posts, the deflector walls and the plunger.
+top rollover lanes, the pop bumpers, the rubber posts, the deflector walls and the plunger; on
+request, then, a drop bank and a spinner.
 
 :func:`draw_layout` returns a table description (as ``load_table`` reads from YAML); the caller
 validates it and checks that it plays. Each step draws from the same ``rng`` in a fixed order, so
-a seed always gives the same layout.
+a seed always gives the same layout. The drop bank and the spinner are drawn after the rest, from
+a stream of their own, so that the rest of a layout is the same with them or without them.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pinball_env.physics import point_segment_distance
 from pinball_env.procgen.obstacles import Obstacles, mm, point
 from pinball_env.procgen.ranges import Ranges
 
@@ -36,6 +39,19 @@ MATERIALS = {
     "bumper": {"restitution": 0.9, "friction": 0.3},
     "metal": {"restitution": 0.3, "friction": 0.2},
 }
+# The material of drop targets' faces, in a layout's materials only when it has targets.
+TARGET_MATERIAL = {"restitution": 0.5, "friction": 0.3}
+# A drop bank: its targets (count, inclusive), each target's length [m], the gap between two
+# targets [m], the points per target and the time the bank takes to rise again [s].
+BANK_TARGETS = (2, 4)
+DROP_LENGTH = (0.03, 0.04)
+DROP_GAP = 0.01
+DROP_SCORE = 100
+BANK_RESET_TIME = 1.0
+# A spinner: its width across the path [m], and as classic_v1's: its flap's radius [m], its
+# damping [1/s] and friction [rad/s^2], its points per revolution.
+SPINNER_WIDTH = (0.05, 0.07)
+SPINNER = {"radius": 0.015, "damping": 0.5, "friction": 20.0, "score": 10}
 
 
 class LayoutError(Exception):
@@ -77,6 +93,11 @@ class Layout:
         return (self.left + self.lane_x) / 2.0
 
     @property
+    def plunger(self) -> list[float]:
+        """Where the plunger holds the ball (the ball's start), at the shooter lane's foot."""
+        return point(self.lane_x + LANE_WIDTH / 2.0, 0.04)
+
+    @property
     def arch_radius(self) -> float:
         return (self.right - self.left) / 2.0
 
@@ -102,9 +123,16 @@ class Layout:
         self.obstacles.add_wall(wall["points"])
 
 
-def draw_layout(rng: np.random.Generator, ranges: Ranges, name: str) -> dict:
+def draw_layout(
+    rng: np.random.Generator,
+    ranges: Ranges,
+    name: str,
+    targets: np.random.Generator | None = None,
+) -> dict:
     """A table description (as ``load_table`` reads from YAML) drawn with ``rng``; the caller
-    validates it and checks that it plays."""
+    validates it and checks that it plays. With ``targets`` (a random stream of their own) a
+    drop bank and a spinner are drawn from it after the rest (:func:`_draw_targets`), which is
+    then what it is without them."""
     width = mm(rng.uniform(*ranges.width))
     height = mm(width * rng.uniform(*ranges.aspect))
     slope = rng.uniform(*ranges.slope)
@@ -120,7 +148,11 @@ def draw_layout(rng: np.random.Generator, ranges: Ranges, name: str) -> dict:
     _draw_top_lanes(layout)
     _draw_bumpers_and_posts(layout, field_low)
     _draw_deflectors(layout, field_low)
-    return _description(layout, name, slope)
+    description = _description(layout, name, slope)
+    if targets is not None:
+        aim = (layout.centre, pivot_y + reach)  # above the flippers' tips
+        description.update(_draw_targets(layout, targets, field_low, aim))
+    return description
 
 
 def _draw_cabinet(layout: Layout) -> None:
@@ -319,12 +351,78 @@ def _free_deflector(layout: Layout, field_low: float) -> list[list[float]]:
     raise LayoutError("no free place left for a deflector")
 
 
+def _draw_targets(
+    layout: Layout,
+    rng: np.random.Generator,
+    field_low: float,
+    aim: tuple[float, float],
+) -> dict:
+    """A drop bank (2-4 targets in a line, a gap between each two) and a spinner across an open
+    path, each at a random free place between ``field_low`` and the arch, facing ``aim`` (the
+    middle of the flippers) and clear of everything drawn (and of the ball's start) by
+    ``CLEARANCE``; drawn from ``rng`` alone. Returns the description's entries they add."""
+    start = layout.plunger
+    count = int(rng.integers(BANK_TARGETS[0], BANK_TARGETS[1] + 1))
+    length = rng.uniform(*DROP_LENGTH)
+    span = count * length + (count - 1) * DROP_GAP
+    centre, along = _free_line(layout, rng, span / 2.0, field_low, aim, start, "a drop bank")
+    targets = []
+    for i in range(count):
+        offset = -span / 2.0 + i * (length + DROP_GAP)
+        ends = [_along(centre, along, offset), _along(centre, along, offset + length)]
+        targets.append({"name": f"drop_{i}", "points": ends, "score": DROP_SCORE})
+        layout.obstacles.add_wall(ends)
+    bank = {"name": "drop_bank", "material": "target", "reset_time": BANK_RESET_TIME,
+            "targets": targets}  # fmt: skip
+    width = rng.uniform(*SPINNER_WIDTH)
+    centre, along = _free_line(layout, rng, width / 2.0, field_low, aim, start, "a spinner")
+    ends = [_along(centre, along, -width / 2.0), _along(centre, along, width / 2.0)]
+    layout.obstacles.add_wall(ends)
+    return {
+        "materials": {**MATERIALS, "target": TARGET_MATERIAL},
+        "drop_targets": [bank],
+        "spinners": [{"name": "spinner", "points": ends, **SPINNER}],
+    }
+
+
+def _along(centre: tuple[float, float], along: tuple[float, float], offset: float) -> list[float]:
+    """The point ``offset`` from ``centre`` in the direction ``along``, rounded."""
+    return point(centre[0] + offset * along[0], centre[1] + offset * along[1])
+
+
+def _free_line(
+    layout: Layout,
+    rng: np.random.Generator,
+    half: float,
+    low: float,
+    aim: tuple[float, float],
+    start: list[float],
+    what: str,
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The centre of a line ``2 * half`` long at a random free place between ``low`` and the
+    arch, and its direction: square to the way to ``aim``, so that it faces it."""
+    left, lane_x = layout.left, layout.lane_x
+    arch_x, arch_y, arch_radius = layout.arch_x, layout.arch_y, layout.arch_radius
+    for _ in range(PLACE_TRIES):
+        x = rng.uniform(left + CLEARANCE + half, lane_x - CLEARANCE - half)
+        y = rng.uniform(low, arch_y + 0.6 * arch_radius)
+        if y > arch_y and math.hypot(x - arch_x, y - arch_y) > arch_radius - CLEARANCE:
+            continue
+        to_aim = math.hypot(aim[0] - x, aim[1] - y)
+        along = ((aim[1] - y) / to_aim, (x - aim[0]) / to_aim)
+        ends = (*_along((x, y), along, -half), *_along((x, y), along, half))
+        clear = layout.obstacles.segment_gap(ends) >= CLEARANCE
+        if clear and point_segment_distance(*start, *ends) >= BALL_RADIUS + CLEARANCE:
+            return (x, y), along
+    raise LayoutError(f"no free place left for {what}")
+
+
 def _description(layout: Layout, name: str, slope: float) -> dict:
     """The table description of the drawn elements, with the ball and the plunger: launch
     speeds scaled from the classic table's by the climb to the top."""
     climb = math.sqrt(layout.height * math.sin(math.radians(slope)))
     scale = climb / math.sqrt(1.07 * math.sin(math.radians(6.5)))
-    plunger = point(layout.lane_x + LANE_WIDTH / 2.0, 0.04)
+    plunger = layout.plunger
     return {
         "name": name,
         "playfield": {"width": layout.width, "height": layout.height},

@@ -7,6 +7,12 @@
 - with the flippers at rest, every ball from random reachable places, sent across between the
   slingshots, or launched, drains within ``DRAIN_TIME``: no pocket holds a ball, and no pair of
   kickers keeps one bouncing for ever.
+
+The kernel has the table's drop targets and spinners, so the balls meet them as in play. A ball
+knocks a drop target down, though, so a bank standing across the way would not stop the balls of
+the check: before them, the check finds that a ball can get from the plunger into the playfield
+and down to the drain with every drop target standing (:func:`_standing_targets`), and the balls
+dropped at random places start where they can with the targets standing.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from pinball_env.physics import first_flipper
 from pinball_env.physics.columns import BALL_X, BALL_Y, CONTACT_ELEMENT
 from pinball_env.procgen.layout import DRAIN_Y
 from pinball_env.table import Table
+from pinball_env.table.reachable import CELL, free_space, touches
 
 # With the flippers at rest, every ball must drain within this [s].
 DRAIN_TIME = 60.0
@@ -57,18 +64,52 @@ def playability(table: Table, rng: np.random.Generator, drops: int = DROPS) -> s
     """What keeps ``table`` from being played (None: nothing): the checks of the module's
     docstring, run on the swept kernel with ``drops`` balls at places drawn from ``rng``."""
     lane_x = min(s[0] for s in _lane_walls(table))
-    starts = _starts(table, rng, drops, lane_x)
+    space = table.free_space
+    if table.drop_targets:
+        space = _free_space_with_targets(table)
+        problem = _standing_targets(table, space, lane_x)
+        if problem is not None:
+            return problem
+    starts = _starts(table, rng, drops, lane_x, space)
     outcome = _roll(table, starts, lane_x)
     if isinstance(outcome, str):
         return outcome
     return _shares(starts, *outcome)
 
 
-def _starts(table: Table, rng: np.random.Generator, drops: int, lane_x: float) -> Starts:
+def _free_space_with_targets(table: Table) -> np.ndarray:
+    """``table.free_space`` with every drop target standing: where a ball centre can get to
+    from the plunger without knocking one down."""
+    geometry = table.pack()
+    start = table.plunger.position if table.plunger is not None else table.ball.start
+    segments = geometry.segments[~geometry.segment_one_sided]
+    drains = geometry.sensors[geometry.sensor_drain]
+    return free_space(
+        table.width, table.height, table.ball.radius,
+        np.concatenate([segments, geometry.drop_targets]), geometry.circles, geometry.flippers,
+        start, drains,
+    )  # fmt: skip
+
+
+def _standing_targets(table: Table, space: np.ndarray, lane_x: float) -> str | None:
+    """What the drop targets, all standing, block (None: nothing): the launch (no place in the
+    playfield proper reachable from the plunger, ``space``) or the drain."""
+    x = (np.flatnonzero(space.any(axis=0)) + 0.5) * CELL  # columns with a reachable cell
+    if not (x < lane_x - table.ball.radius).any():
+        return "the drop targets block the plunger's launch path"
+    geometry = table.pack()
+    if not touches(space, geometry.sensors[geometry.sensor_drain], 2.5 * CELL, CELL):
+        return "the drop targets keep the ball from the drain"
+    return None
+
+
+def _starts(
+    table: Table, rng: np.random.Generator, drops: int, lane_x: float, space: np.ndarray
+) -> Starts:
     """The balls of the check: plunger shots at speeds across the plunger's range, a ball down
     each inlane, balls sent across between the slingshots (where kicks that balance gravity
     could keep one bouncing from side to side for ever), and ``drops`` balls at random
-    reachable places, at random speeds."""
+    reachable places (``space``, a ``free_space`` grid), at random speeds."""
     plunger = table.plunger
     speeds = np.linspace(plunger.speed[0], plunger.speed[1], LAUNCHES)
     inlanes = [s for s in table.sensors if s.name.endswith("_inlane")]
@@ -79,7 +120,7 @@ def _starts(table: Table, rng: np.random.Generator, drops: int, lane_x: float) -
     balls += _sling_starts(table)
     checked = len(balls)
     radius = table.ball.radius
-    cells = np.argwhere(table.free_space)  # (row, column) of reachable 1 mm cells
+    cells = np.argwhere(space)  # (row, column) of reachable 1 mm cells
     x = (cells[:, 1] + 0.5) * 0.001
     y = (cells[:, 0] + 0.5) * 0.001
     cells = cells[(x < lane_x - radius) & (y > DRAIN_Y + radius)]

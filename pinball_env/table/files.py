@@ -5,8 +5,9 @@ The built-in tables are package data in ``pinball_env/table/tables/`` (``classic
 default, and ``box.yaml``), found through :mod:`importlib.resources` so that they work from a
 wheel as well as from a checkout. Generated tables are named ``PREFIX:...``; the package that
 makes them registers a function per prefix (:func:`register_generator`: ``pinball_env.procgen``
-registers ``procgen`` and ``procgen-hard`` when imported, as importing ``pinball_env`` does), so
-that :func:`load_any_table` takes their names while this package imports no generator.
+registers ``procgen`` and ``procgen-hard``, each also with ``+targets``, when imported, as
+importing ``pinball_env`` does), so that :func:`load_any_table` takes their names while this
+package imports no generator.
 """
 
 from __future__ import annotations
@@ -129,7 +130,7 @@ def dump_table(table: Table, path: str | os.PathLike[str]) -> Path:
 
 
 # A generated table's name: a prefix, a colon, and what the prefix's generator reads.
-GENERATED_NAME = re.compile(r"([A-Za-z][\w-]*):(.*)", re.DOTALL)
+GENERATED_NAME = re.compile(r"([A-Za-z][\w+-]*):(.*)", re.DOTALL)
 # Generated tables by prefix: the function that makes the table of a name (see the docstring).
 _GENERATORS: dict[str, Callable[[str], Table]] = {}
 
@@ -138,8 +139,8 @@ def register_generator(prefix: str, make: Callable[[str], Table]) -> None:
     """Let :func:`load_any_table` take the names ``"PREFIX:..."``: ``make(name)`` returns the
     table of such a name (or raises ``TableError``). Registering a prefix again replaces it."""
     if not GENERATED_NAME.fullmatch(f"{prefix}:"):
-        raise ValueError(f"a generated table's prefix is a letter then letters, digits, _ or -, "
-                         f"got {prefix!r}")  # fmt: skip
+        raise ValueError(f"a generated table's prefix is a letter then letters, digits, _, - "
+                         f"or +, got {prefix!r}")  # fmt: skip
     _GENERATORS[prefix] = make
 
 
