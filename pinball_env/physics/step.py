@@ -138,7 +138,7 @@ def is_hit(speed, kick, resting_speed):
     return speed >= resting_speed or kick > 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_contact(state, env, element, time, speed):
     """Append a contact to env's log (counting it even when the log is full)."""
     row = state.contact_count[env]
@@ -152,7 +152,7 @@ def log_contact(state, env, element, time, speed):
 # --- the elements ---------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def element_props(element, geometry):
     """Surface properties row of a solid element (drop targets included)."""
     j = element - first_circle(geometry)
@@ -160,23 +160,19 @@ def element_props(element, geometry):
         return geometry.segment_props[element]
     if j < geometry.circles.shape[0]:
         return geometry.circle_props[j]
-    if element >= first_drop_target(geometry):
-        return geometry.drop_target_props[element - first_drop_target(geometry)]
-    return geometry.flipper_props[element - first_flipper(geometry)]
+    if element < first_sensor(geometry):
+        return geometry.flipper_props[element - first_flipper(geometry)]
+    return geometry.drop_target_props[element - first_drop_target(geometry)]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def separation(x, y, element, geometry, angles):
     """Distance from the point (x, y) to the surface of a solid element (negative inside) and
     the unit normal from the surface towards the point (zero where it is undefined), the
     flippers at ``angles`` (a drop target as if it stood)."""
     j = element - first_circle(geometry)
-    if j < 0 or element >= first_drop_target(geometry):
-        s = (
-            geometry.segments[element]
-            if j < 0
-            else geometry.drop_targets[element - first_drop_target(geometry)]
-        )
+    if j < 0:
+        s = geometry.segments[element]
         gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
         d = norm(gx, gy)
         return (d, gx / d, gy / d) if d > 0.0 else (d, 0.0, 0.0)
@@ -185,6 +181,11 @@ def separation(x, y, element, geometry, angles):
         gx, gy = x - c[0], y - c[1]
         d = norm(gx, gy)
         return (d - c[2], gx / d, gy / d) if d > 0.0 else (d - c[2], 0.0, 0.0)
+    if element >= first_sensor(geometry):  # a drop target
+        s = geometry.drop_targets[element - first_drop_target(geometry)]
+        gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
+        d = norm(gx, gy)
+        return (d, gx / d, gy / d) if d > 0.0 else (d, 0.0, 0.0)
     j = element - first_flipper(geometry)
     f = geometry.flippers[j]
     return flipper_distance(
@@ -193,7 +194,7 @@ def separation(x, y, element, geometry, angles):
     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def surface_distance(x, y, element, geometry, angles):
     """Distance from the point (x, y) to the surface of a solid element (negative inside), the
     flippers at ``angles``: :func:`separation` without the normal."""
@@ -455,6 +456,55 @@ def count_kickbacks(state, env, x, y, vx, vy, duration, kickbacks, lit, kickback
             log_contact(state, env, kickback_id + j, time, 0.0)
 
 
+@njit(cache=True)
+def sweep_drop_targets(state, env, geometry, x, y, dx, dy, r, t, nx, ny, svx, svy, element, cut):
+    """The pass's earliest contact ``(t, nx, ny, svx, svy, element, cut)`` (as found over the
+    other solids) with env ``env``'s standing drop targets swept too, the ball moving from
+    (x, y) by (dx, dy); ties go to the lower id (the others')."""
+    targets, bounds, up = geometry.drop_targets, geometry.drop_target_bounds, state.targets_up
+    travel = math.sqrt(dx * dx + dy * dy)
+    first = first_drop_target(geometry)
+    for j in range(targets.shape[0]):
+        if not up[env, j]:
+            continue
+        d, b = targets[j], bounds[j]
+        tt, tnx, tny = segment_contact(
+            x, y, dx, dy, r, travel, d[0], d[1], d[2], d[3], b[0], b[1], b[2], False
+        )
+        if tt < t:
+            t, nx, ny, svx, svy, element, cut = tt, tnx, tny, 0.0, 0.0, first + j, False
+    return t, nx, ny, svx, svy, element, cut
+
+
+@njit(cache=True)
+def cross_target_lines(state, env, geometry, x, y, vx, vy, used, start):
+    """The spinner and kickback lines of env ``env`` on the ball's move from (x, y) at (vx, vy)
+    for ``used`` seconds, from ``start`` [s into the frame]. A lit kickback's line crossed
+    against its kick ends the move there: it fires (the caller gives the ball its kick) and goes
+    dark. Each spinner crossed is spun (``physics.targets.spin_spinner``); each kickback line
+    crossed against its kick is a hit, lit or not. Returns ``(kicked, used)``: the kickback
+    that fired (-1: none) and the move's time, cut short at its line."""
+    kickbacks, lit = geometry.kickbacks, state.kickback_lit[env]
+    kicked = -1
+    if kickbacks.shape[0] > 0:
+        kicked, u = kickback_crossing(x, y, vx, vy, used, kickbacks, lit)
+        if kicked >= 0:
+            used *= u
+        count_kickbacks(state, env, x, y, vx, vy, used, kickbacks, lit,
+                        first_kickback(geometry), start + used)  # fmt: skip
+    spinners = geometry.spinners
+    for j in range(spinners.shape[0]):
+        u = sensor_crossing(x, y, vx * used, vy * used, spinners[j])
+        if u < INF:
+            spin_spinner(spinners[j], state.spinners[env, j], vx, vy, start + used * u)
+    if kicked >= 0:
+        element = first_kickback(geometry) + kicked
+        state.hits[env, element] += 1
+        log_contact(state, env, element, start + used, 0.0)
+        lit[kicked] = False
+    return kicked, used
+
+
 # --- one ball ------------------------------------------------------------------------------------
 
 
@@ -584,16 +634,12 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     if has_cabinet:
         cabinet_frame(state.cabinet[env], geometry.cabinet[0], h, cabinet_dv)
     kick_scale = 0.0 if state.tilted[env] else 1.0
-    # Targets and their kin, on a table with them (``physics.targets``).
-    drop_targets, drop_bounds = geometry.drop_targets, geometry.drop_target_bounds
-    spinners, kickbacks = geometry.spinners, geometry.kickbacks
-    n_targets, n_spinners, n_kickbacks = (
-        drop_targets.shape[0],
-        spinners.shape[0],
-        kickbacks.shape[0],
-    )
-    target_id, kickback_id = first_drop_target(geometry), first_kickback(geometry)
-    up, spins, lit = state.targets_up[env], state.spinners[env], state.kickback_lit[env]
+    # Targets and their kin, on a table with them (``physics.targets``): each pass calls two
+    # helpers for them, only there (a call in the pass loop costs every table, taken or not).
+    n_targets = geometry.drop_targets.shape[0]
+    n_lines = geometry.spinners.shape[0] + geometry.kickbacks.shape[0]
+    has_targets = n_targets + n_lines > 0
+    target_id = first_drop_target(geometry)
     ball = state.balls[env]
     x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
     for k in range(settings.substeps):
@@ -645,35 +691,18 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                         t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
                         element = flipper_id + flipper
                         cut = fnx == 0.0 and fny == 0.0  # the sweep ran out of slices
-                if n_targets > 0:  # the standing drop targets (ties go to lower ids)
-                    dx, dy = vx * remaining, vy * remaining
-                    travel = math.sqrt(dx * dx + dy * dy)
-                    for j in range(n_targets):
-                        if not up[j]:
-                            continue
-                        d = drop_targets[j]
-                        b = drop_bounds[j]
-                        tt, tnx, tny = segment_contact(
-                            x, y, dx, dy, r, travel, d[0], d[1], d[2], d[3], b[0], b[1], b[2],
-                            False,
-                        )  # fmt: skip
-                        if tt < t:
-                            t, nx, ny, svx, svy = tt, tnx, tny, 0.0, 0.0
-                            element, cut = target_id + j, False
-                used = remaining * min(t, 1.0)
-                # A lit kickback's line crossed on the way: the ball goes there, and on at the
-                # kick velocity (the kick, not the contact, ends this pass).
                 kicked = -1
-                if n_kickbacks > 0:
-                    kicked, u = kickback_crossing(x, y, vx, vy, used, kickbacks, lit)
-                    if kicked >= 0:
-                        used *= u
-                if n_spinners > 0:
-                    for j in range(n_spinners):
-                        u = sensor_crossing(x, y, vx * used, vy * used, spinners[j])
-                        if u < INF:
-                            time = k * h + h - remaining + used * u
-                            spin_spinner(spinners[j], spins[j], vx, vy, time)
+                if has_targets:  # drop targets, spinners, kickbacks: see physics.targets
+                    t, nx, ny, svx, svy, element, cut = sweep_drop_targets(
+                        state, env, geometry, x, y, vx * remaining, vy * remaining, r, t, nx, ny,
+                        svx, svy, element, cut,
+                    )  # fmt: skip
+                    used = remaining * min(t, 1.0)
+                    kicked, used = cross_target_lines(
+                        state, env, geometry, x, y, vx, vy, used, k * h + h - remaining
+                    )
+                else:
+                    used = remaining * min(t, 1.0)
                 # Sensor crossings on the way to the contact (or to the end of the substep),
                 # after a cheap test that rules out the common case.
                 crossed = False
@@ -694,15 +723,9 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 x += vx * used
                 y += vy * used
                 remaining -= used
-                if n_kickbacks > 0:
-                    count_kickbacks(state, env, x - vx * used, y - vy * used, vx, vy, used,
-                                    kickbacks, lit, kickback_id, k * h + h - remaining)  # fmt: skip
-                if kicked >= 0:
-                    state.hits[env, kickback_id + kicked] += 1
-                    log_contact(state, env, kickback_id + kicked, k * h + h - remaining, 0.0)
-                    vx, vy = kickbacks[kicked, KICKBACK_VX], kickbacks[kicked, KICKBACK_VY]
-                    spin = 0.0
-                    lit[kicked] = False
+                if kicked >= 0:  # a lit kickback fired: the ball leaves its line at the kick
+                    kick = geometry.kickbacks[kicked]
+                    vx, vy, spin = kick[KICKBACK_VX], kick[KICKBACK_VY], 0.0
                     continue
                 if element < 0 or cut:  # a cut drops the rest of the substep, as a wedge does
                     break
@@ -769,6 +792,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     angles[j], _ = flipper_end(
                         angle[env, j], targets[j], omegas[j], stops[j], held[j], held_time, h
                     )
+                up = state.targets_up[env]
                 if deepest_overlap(x, y, geometry, angles, up, r) > settings.skin:
                     x, y = settle(x, y, geometry, angles, up, r, settings.skin)
                 if deepest_overlap(x, y, geometry, angles, up, r) > settings.skin:
@@ -781,7 +805,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 for n in range(n_hits):
                     state.hits[env, hit_elements[n]] += 1
                     if target_id <= hit_elements[n] < target_id + n_targets:
-                        up[hit_elements[n] - target_id] = False  # the target drops
+                        state.targets_up[env, hit_elements[n] - target_id] = False  # it drops
         # Commit the flippers' angles at the end of the substep.
         for j in range(n_flippers):
             angle[env, j], omega[env, j] = flipper_end(
@@ -789,7 +813,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
             )
     ball[BALL_X], ball[BALL_Y] = x, y
     ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
-    if n_targets + n_spinners > 0:
+    if has_targets:
         update_targets(geometry, state, env, x, y, r, settings.dt)
     return math.isfinite(x + y + vx + vy + spin)
 
