@@ -129,14 +129,11 @@ class Flipper:
         return self.swing / self.return_time
 
 
-@dataclass(frozen=True)
-class Sensor:
-    """A line the ball rolls over (rollover, drain); a crossing of the ball's centre is an event."""
+class _Line:
+    """An element on a straight line between two ``points`` (sensors, targets, spinners,
+    kickbacks)."""
 
-    name: str
-    points: tuple[tuple[float, float], tuple[float, float]]  # the two ends [m]
-    drain: bool = False  # a crossing takes the ball out of play [-]
-    score: int = 0  # points per crossing [-]
+    points: tuple[tuple[float, float], tuple[float, float]]
 
     @property
     def segment(self) -> tuple[float, float, float, float]:
@@ -145,7 +142,17 @@ class Sensor:
 
 
 @dataclass(frozen=True)
-class StandupTarget:
+class Sensor(_Line):
+    """A line the ball rolls over (rollover, drain); a crossing of the ball's centre is an event."""
+
+    name: str
+    points: tuple[tuple[float, float], tuple[float, float]]  # the two ends [m]
+    drain: bool = False  # a crossing takes the ball out of play [-]
+    score: int = 0  # points per crossing [-]
+
+
+@dataclass(frozen=True)
+class StandupTarget(_Line):
     """A scoring face that stays: a two-sided segment that counts every hit."""
 
     name: str
@@ -153,26 +160,18 @@ class StandupTarget:
     material: str
     score: int = 0  # points per hit [-]
 
-    @property
-    def segment(self) -> tuple[float, float, float, float]:
-        return (*self.points[0], *self.points[1])
-
     def as_wall(self) -> Wall:
         return Wall(self.name, self.points, self.material)
 
 
 @dataclass(frozen=True)
-class DropTarget:
+class DropTarget(_Line):
     """One target of a bank: a two-sided segment that stops the ball while up and drops when
     hit (see ``physics.targets``)."""
 
     name: str
     points: tuple[tuple[float, float], tuple[float, float]]  # its two ends [m]
     score: int = 0  # points per hit (the hit that drops it) [-]
-
-    @property
-    def segment(self) -> tuple[float, float, float, float]:
-        return (*self.points[0], *self.points[1])
 
 
 @dataclass(frozen=True)
@@ -191,7 +190,7 @@ class DropBank:
 
 
 @dataclass(frozen=True)
-class Spinner:
+class Spinner(_Line):
     """A flap across a lane that the ball passes through, spinning it (``physics.targets``);
     each revolution is a hit."""
 
@@ -202,13 +201,9 @@ class Spinner:
     friction: float = 20.0  # the bearing's constant deceleration [rad/s^2]
     score: int = 0  # points per revolution [-]
 
-    @property
-    def segment(self) -> tuple[float, float, float, float]:
-        return (*self.points[0], *self.points[1])
-
 
 @dataclass(frozen=True)
-class Kickback:
+class Kickback(_Line):
     """A kicker at the bottom of an outlane: a ball crossing its line against ``kick`` is a hit,
     and while the kickback is lit (the rules light it) the ball leaves at ``kick`` and the
     kickback goes dark."""
@@ -218,10 +213,6 @@ class Kickback:
     kick: tuple[float, float]  # the velocity it gives the ball [m/s]
     lit: bool = False  # lit at the start of a game [-]
     score: int = 0  # points per hit [-]
-
-    @property
-    def segment(self) -> tuple[float, float, float, float]:
-        return (*self.points[0], *self.points[1])
 
 
 @dataclass(frozen=True)
