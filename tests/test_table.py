@@ -89,7 +89,7 @@ def test_packed_arrays() -> None:
         "segment_one_sided": ((n_segments,), np.bool_),
         "circles": ((n_circles, 3), np.float64),
         "circle_props": ((n_circles, columns.PROP_SIZE), np.float64),
-        "segment_bounds": ((n_segments, 3), np.float64),
+        "segment_bounds": ((n_segments, columns.BOUND_SIZE), np.float64),
         # box.yaml has no flippers and no sensors: empty arrays of the right shape
         "flippers": ((0, columns.FLIPPER_SIZE), np.float64),
         "flipper_props": ((0, columns.PROP_SIZE), np.float64),

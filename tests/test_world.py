@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 import yaml
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics.columns import BALL_SPIN, BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.near import gather_near
 from pinball_env.sim.world import CONTACT_CAPACITY, World
 from pinball_env.table import builtin_tables_dir, load_table, table_from_dict
 
@@ -293,6 +294,45 @@ def test_ball_never_leaves_a_closed_room(
         assert min_gap(state[BALL_X], state[BALL_Y], polygon) >= RADIUS - 4 * SKIN
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    room=st.sampled_from(sorted(ROOMS)),
+    fx=st.floats(0.0, 1.0),
+    fy=st.floats(0.0, 1.0),
+    speed=st.floats(0.0, 1000.0),
+    heading=st.floats(0.0, 2 * math.pi),
+    substeps=st.integers(1, 12),
+    frame_rate=st.floats(20.0, 480.0),
+    restitution=st.floats(0.0, 1.0),
+)
+# Substeps longer than physics.near.NEAR_TIME: a new zone must hold the whole path.
+@example(room="box", fx=0.5, fy=0.9, speed=3.0, heading=4.0, substeps=1, frame_rate=20.0,
+         restitution=1.0)  # fmt: skip
+def test_candidate_sets_sweep_bitwise_as_everything_in_any_room(
+    room, fx, fy, speed, heading, substeps, frame_rate, restitution
+):
+    polygon = ROOMS[room]
+    (x_lo, y_lo), (x_hi, y_hi) = ROOM_STARTS[room]
+    x, y = x_lo + fx * (x_hi - x_lo), y_lo + fy * (y_hi - y_lo)
+    if not inside_polygon(x, y, polygon) or min_gap(x, y, polygon) < RADIUS * 1.01:
+        return
+    runs = []
+    for brute in (False, True):
+        world = make_world(
+            [{"points": polygon, "extra": {"closed": True}}], start=(x, y),
+            restitution=restitution, substeps=substeps, frame_rate=frame_rate,
+        )  # fmt: skip
+        world.place_ball(0, (x, y), (speed * math.cos(heading), speed * math.sin(heading)))
+        if brute:
+            sweep_everything(world)
+        trace = []
+        for _ in range(60):
+            world.step()
+            trace.append((world.balls.tobytes(), world.state.contacts.tobytes()))
+        runs.append(trace)
+    assert runs[0] == runs[1]
+
+
 @pytest.mark.slow
 def test_elastic_frictionless_bounces_conserve_energy():
     """Restitution 1, no gravity, no friction: kinetic energy constant over 1e5 bounces."""
@@ -364,7 +404,7 @@ def test_ball_partly_through_a_gate_next_to_a_wall_goes_back_instead_of_into_the
 
 
 def crowded_classic():
-    """The classic table with 63 pins in its upper field: over the broad-phase threshold."""
+    """The classic table with 63 pins in its upper field."""
     data = yaml.safe_load((builtin_tables_dir() / "classic.yaml").read_text())
     for i in range(9):
         for j in range(7):
@@ -375,22 +415,50 @@ def crowded_classic():
     return table_from_dict(data)
 
 
-@pytest.mark.slow  # minutes without the JIT
-def test_the_broad_phase_finds_bitwise_the_contacts_of_testing_everything():
-    table = crowded_classic()
-    assert table.pack_settings().grid_columns > 1  # the grid is in use
+def sweep_everything(world: World) -> None:
+    """Give every env of ``world`` a zone of infinite radius: a candidate set of every element,
+    for good (``physics.near``), as the kernel was before it had candidate sets."""
+    scratch = world.scratch
+    for env in range(world.n_envs):
+        gather_near(0.0, 0.0, math.inf, world.tables.geometry_of(env), scratch.near[env],
+                    scratch.near_ends[env], scratch.near_zone[env])  # fmt: skip
+
+
+def traces(table, n_frames: int, place) -> list:
+    """The balls and contact logs of 64 envs on ``table``, frame by frame, with candidate sets
+    and with every element swept; ``place(world, env, rng)`` puts each env's ball in play."""
     runs = []
     for brute in (False, True):
         world = World(table, n_envs=64)
-        if brute:
-            world.settings = world.settings._replace(grid_columns=1, grid_rows=1)
         rng = np.random.default_rng(0)
         for env in range(64):
-            world.launch(env, 2.2 + env * 0.015)
+            place(world, env, rng)
+        if brute:
+            sweep_everything(world)
         trace = []
-        for _ in range(400):
+        for _ in range(n_frames):
             world.step(rng.integers(0, 2, size=(64, 2)).astype(bool))
             trace.append((world.balls.tobytes(), world.state.contacts.tobytes()))
         runs.append(trace)
-    assert runs[0] == runs[1]
-    assert load_table("classic").pack_settings().grid_columns == 1  # below the threshold
+    return runs
+
+
+@pytest.mark.slow  # minutes without the JIT
+@pytest.mark.parametrize("table", ["classic", "classic_v1", "crowded"])
+def test_the_candidate_sets_find_bitwise_the_contacts_of_sweeping_everything(table):
+    table = crowded_classic() if table == "crowded" else load_table(table)
+    launched, thrown = (
+        traces(table, 400, lambda world, env, rng: world.launch(env, 2.2 + env * 0.015)),
+        traces(table, 120, throw_anywhere),
+    )
+    assert launched[0] == launched[1]
+    assert thrown[0] == thrown[1]
+
+
+def throw_anywhere(world: World, env: int, rng: np.random.Generator) -> None:
+    """Env ``env``'s ball at a random place of the playfield, at up to 20 m/s in any
+    direction (some start inside walls: the kernel pushes them out)."""
+    table = world.table_of(env)
+    speed, heading = rng.uniform(0.0, 20.0), rng.uniform(0.0, 2.0 * math.pi)
+    position = (rng.uniform(0.05, table.width - 0.05), rng.uniform(0.05, table.height - 0.05))
+    world.place_ball(env, position, (speed * math.cos(heading), speed * math.sin(heading)))

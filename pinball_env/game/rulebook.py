@@ -183,7 +183,8 @@ def run_rules(env, book, state, scores):
         for _ in range(times):
             points += apply_effects(env, book, state, rule)
             events[rule] += 1
-    before[:] = commands
+    for j in range(before.shape[0]):  # (an element loop: the step runs without NRT)
+        before[j] = commands[j]
     state.rule_points[env] += points
     return points
 

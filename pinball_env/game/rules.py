@@ -27,6 +27,7 @@ from pinball_env.game.play import (
     Rules,
     new_progress,
     play_frames,
+    play_frames_per_env,
 )
 from pinball_env.game.rulebook import RuleBook, compile_rules
 from pinball_env.options import PinballOptions
@@ -396,7 +397,8 @@ class Game:
                 np.ascontiguousarray(cabinet), swept)  # fmt: skip
         play = self._play.get(type(geometries))  # one table (tuples) or one per env (lists)
         if play is None:
-            play = self._play[type(geometries)] = compiled_entry(play_frames, (*args, 0, 0))
+            loop = play_frames if isinstance(geometries, tuple) else play_frames_per_env
+            play = self._play[type(geometries)] = compiled_entry(loop, (*args, 0, 0))
         while True:
             self.world.threads.run(play, self.n_envs, *args)
             if not progress.finite.all():

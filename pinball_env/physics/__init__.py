@@ -6,6 +6,7 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 - ``sweep.py``: swept ball-segment and ball-circle tests, point-segment distance;
 - ``flipper.py``: swept contact with a rotating flipper (a kinematic tapered capsule);
 - ``step.py``: the world step over a batch of envs, split into named helpers;
+- ``near.py``: the broad phase, each ball's candidate set of the elements it can reach soon;
 - ``data.py``: the kernel's data (``Geometry``, ``Settings``, ``State``, ``Scratch``) and their
   constructors ``make_state`` and ``make_scratch``;
 - ``columns.py``: what each column of those arrays means.
@@ -17,12 +18,10 @@ from pinball_env.physics.data import (
     Scratch,
     Settings,
     State,
-    build_grid,
     element_count,
     first_circle,
     first_flipper,
     first_sensor,
-    grid_layout,
     make_scratch,
     make_state,
     segment_bounds,
@@ -51,7 +50,6 @@ __all__ = [
     "Scratch",
     "Settings",
     "State",
-    "build_grid",
     "capsule_distance",
     "capsule_face_normal",
     "deepest_overlap",
@@ -61,7 +59,6 @@ __all__ = [
     "first_sensor",
     "flipper_distance",
     "flipper_reach",
-    "grid_layout",
     "make_scratch",
     "make_state",
     "point_segment_distance",

@@ -19,6 +19,15 @@ PROP_KICK = 2  # speed added along the contact normal on every impact [m/s] (bum
 PROP_SIZE = 3
 
 # Segment geometry, array of shape (n_segments, 4): x0, y0, x1, y1 [m].
+# Segment bounds (walls, drop targets), array of shape (n_segments, BOUND_SIZE), float64: what
+# the sweeps' cheap tests read (``data.segment_bounds``).
+BOUND_X = 0  # centre of the bounding circle [m]
+BOUND_Y = 1
+BOUND_RADIUS = 2  # its radius: half the length [m]
+BOUND_NX = 3  # unit normal of the segment's line, rot+90(P1 - P0) (zero for a point)
+BOUND_NY = 4
+BOUND_OFFSET = 5  # the line's offset along it: n . P0 [m]
+BOUND_SIZE = 6
 # Circle geometry, array of shape (n_circles, 3): x, y, radius [m].
 # Sensor geometry (rollovers, drain), array of shape (n_sensors, 4): x0, y0, x1, y1 [m]. The
 # ball passes over sensors; a crossing of its centre is an event. Drains take the ball out of play.

@@ -14,7 +14,6 @@ geometry tuple counts a reference to each of its arrays, which per contact costs
 arithmetic.
 """
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -22,6 +21,13 @@ from numba import njit
 
 from pinball_env.physics.columns import (
     BALL_STATE_SIZE,
+    BOUND_NX,
+    BOUND_NY,
+    BOUND_OFFSET,
+    BOUND_RADIUS,
+    BOUND_SIZE,
+    BOUND_X,
+    BOUND_Y,
     CABINET_STATE_SIZE,
     CONTACT_SIZE,
     SPIN_STATE_SIZE,
@@ -30,16 +36,13 @@ from pinball_env.physics.columns import (
 # Contacts logged per env and frame; more are counted but not logged. A frame of a ball rattling
 # in a corner makes a few dozen; the cap bounds memory, not physics.
 CONTACT_CAPACITY = 64
-# Tables with fewer segments and circles than this skip the broad phase: on the 48 elements of
-# the classic table the bounding-circle test of each is cheaper than walking a grid (measured).
-MIN_GRID_ELEMENTS = 96
 
 
 class Geometry(NamedTuple):
     """The static table as read-only arrays (see ``columns`` for the columns)."""
 
     segments: np.ndarray  # (S, 4) float64: x0, y0, x1, y1 [m]
-    segment_bounds: np.ndarray  # (S, 3): bounding circles, from segment_bounds(segments)
+    segment_bounds: np.ndarray  # (S, BOUND_SIZE): from segment_bounds(segments)
     segment_props: np.ndarray  # (S, PROP_SIZE) float64
     segment_one_sided: np.ndarray  # (S,) bool
     circles: np.ndarray  # (C, 3) float64: x, y, radius [m]
@@ -48,17 +51,13 @@ class Geometry(NamedTuple):
     flipper_props: np.ndarray  # (F, PROP_SIZE) float64 (kick 0)
     sensors: np.ndarray  # (K, 4) float64: x0, y0, x1, y1 [m]
     sensor_drain: np.ndarray  # (K,) bool
-    # The broad phase (see build_grid): for each grid cell the segments and circles whose
-    # bounding box overlaps it, packed as [cell starts (cells + 1) | ids | first and last column
-    # and row of each element (S + C, 4)], int64. The cell size and count are in Settings.
-    grid: np.ndarray
     # The cabinet's constants, (1, CABINET_SIZE) float64 (see ``physics.cabinet``), or
     # (0, CABINET_SIZE) for a table without a cabinet: then nothing moves it, and the ball feels
     # gravity alone.
     cabinet: np.ndarray
     # Targets and their kin (see ``physics.targets``), each with 0 rows on a table without.
     drop_targets: np.ndarray  # (T, 4) float64: x0, y0, x1, y1 [m], two-sided while up
-    drop_target_bounds: np.ndarray  # (T, 3): bounding circles (segment_bounds)
+    drop_target_bounds: np.ndarray  # (T, BOUND_SIZE): segment_bounds(drop_targets)
     drop_target_props: np.ndarray  # (T, PROP_SIZE) float64 (kick 0)
     drop_target_bank: np.ndarray  # (T,) int64: the bank each belongs to
     bank_reset: np.ndarray  # (B,) float64: a bank rises this long after its last target fell [s]
@@ -77,9 +76,6 @@ class Settings(NamedTuple):
     max_passes: int  # contact passes per substep
     skin: float  # distance left between ball and surface after a contact [m]
     resting_speed: float  # normal speed below which a contact is inelastic [m/s]
-    grid_cell: float  # broad-phase cell size [m]
-    grid_columns: int  # broad-phase cells across and up the playfield (1 x 1: no broad phase)
-    grid_rows: int
 
 
 class State(NamedTuple):
@@ -113,6 +109,10 @@ class Scratch(NamedTuple):
     crossings: np.ndarray  # (N, K) float64: sensor crossings of one move [fraction]
     hit_elements: np.ndarray  # (N, max_passes) int64: hits of one substep, committed at its end
     cabinet_dv: np.ndarray  # (N, substeps, 2) float64: the cabinet's velocity change per substep
+    # The candidate set of each ball (see ``physics.near``): the elements it can reach soon.
+    near: np.ndarray  # (N, M) int64: solids' ids, then flippers', drop targets', sensors' indexes
+    near_ends: np.ndarray  # (N, 4) int64: where each of those groups ends in the row of near
+    near_zone: np.ndarray  # (N, 3) float64: the zone's centre and radius [m] (radius < 0: none)
 
 
 @njit(cache=True, inline="always")
@@ -158,51 +158,22 @@ def element_count(geometry):
     return first_kickback(geometry) + geometry.kickbacks.shape[0]
 
 
-def grid_layout(n_elements: int, width: float, height: float, radius: float) -> tuple:
-    """``(cell, columns, rows)`` of the broad-phase grid of a table: cells about two balls wide,
-    at least 16 across the narrower side; one cell (no broad phase) for fewer than
-    MIN_GRID_ELEMENTS segments and circles."""
-    if n_elements < MIN_GRID_ELEMENTS:
-        return max(width, height), 1, 1
-    cell = max(min(width, height) / 16.0, 2.0 * radius)
-    return cell, max(1, math.ceil(width / cell)), max(1, math.ceil(height / cell))
-
-
-def build_grid(
-    segments: np.ndarray, circles: np.ndarray, cell: float, columns: int, rows: int
-) -> np.ndarray:
-    """The packed broad-phase grid (see :class:`Geometry`): each segment and circle is listed,
-    in id order, in every cell its bounding box overlaps."""
-    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
-    circles = np.asarray(circles, dtype=np.float64).reshape(-1, 3)
-    low = np.concatenate(
-        [np.minimum(segments[:, :2], segments[:, 2:]), circles[:, :2] - circles[:, 2:]]
-    )
-    high = np.concatenate(
-        [np.maximum(segments[:, :2], segments[:, 2:]), circles[:, :2] + circles[:, 2:]]
-    )
-    spans = np.empty((len(low), 4), dtype=np.int64)
-    spans[:, 0] = np.clip(np.floor(low[:, 0] / cell), 0, columns - 1)
-    spans[:, 1] = np.clip(np.floor(high[:, 0] / cell), 0, columns - 1)
-    spans[:, 2] = np.clip(np.floor(low[:, 1] / cell), 0, rows - 1)
-    spans[:, 3] = np.clip(np.floor(high[:, 1] / cell), 0, rows - 1)
-    members: list[list[int]] = [[] for _ in range(columns * rows)]
-    for element, (c0, c1, r0, r1) in enumerate(spans):
-        for row in range(r0, r1 + 1):
-            for column in range(c0, c1 + 1):
-                members[row * columns + column].append(element)
-    starts = np.cumsum([0] + [len(m) for m in members])
-    items = [e for m in members for e in m]
-    return np.concatenate([starts, np.array(items, dtype=np.int64), spans.ravel()]).astype(np.int64)
-
-
 def segment_bounds(segments: np.ndarray) -> np.ndarray:
-    """Bounding circle of every segment, (S, 3): centre x, y and radius (half the length)."""
+    """Bounds of every segment, (S, BOUND_SIZE): its bounding circle (centre and half its
+    length) and its line (unit normal rot+90(P1 - P0) and offset; zero for a point)."""
     segments = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
-    bounds = np.empty((segments.shape[0], 3))
-    bounds[:, 0] = 0.5 * (segments[:, 0] + segments[:, 2])
-    bounds[:, 1] = 0.5 * (segments[:, 1] + segments[:, 3])
-    bounds[:, 2] = 0.5 * np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    bounds = np.zeros((segments.shape[0], BOUND_SIZE))
+    ex, ey = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
+    length = np.hypot(ex, ey)
+    bounds[:, BOUND_X] = 0.5 * (segments[:, 0] + segments[:, 2])
+    bounds[:, BOUND_Y] = 0.5 * (segments[:, 1] + segments[:, 3])
+    bounds[:, BOUND_RADIUS] = 0.5 * length
+    safe = np.where(length > 0.0, length, 1.0)
+    bounds[:, BOUND_NX] = np.where(length > 0.0, -ey / safe, 0.0)
+    bounds[:, BOUND_NY] = np.where(length > 0.0, ex / safe, 0.0)
+    bounds[:, BOUND_OFFSET] = (
+        bounds[:, BOUND_NX] * segments[:, 0] + bounds[:, BOUND_NY] * segments[:, 1]
+    )
     return bounds
 
 
@@ -244,4 +215,12 @@ def make_scratch(geometry: Geometry, settings: Settings, n_envs: int) -> Scratch
         crossings=np.zeros((n_envs, geometry.sensors.shape[0])),
         hit_elements=np.zeros((n_envs, settings.max_passes), dtype=np.int64),
         cabinet_dv=np.zeros((n_envs, settings.substeps, 2)),
+        near=np.zeros((n_envs, near_size(geometry)), dtype=np.int64),
+        near_ends=np.zeros((n_envs, 4), dtype=np.int64),
+        near_zone=np.full((n_envs, 3), -1.0),
     )
+
+
+def near_size(geometry: Geometry) -> int:
+    """The longest candidate set of a table: its solids, drop targets and sensors."""
+    return int(first_spinner(geometry))

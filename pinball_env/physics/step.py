@@ -43,6 +43,12 @@ from pinball_env.physics.columns import (
     BALL_VY,
     BALL_X,
     BALL_Y,
+    BOUND_NX,
+    BOUND_NY,
+    BOUND_OFFSET,
+    BOUND_RADIUS,
+    BOUND_X,
+    BOUND_Y,
     CONTACT_ELEMENT,
     CONTACT_SPEED,
     CONTACT_TIME,
@@ -69,6 +75,15 @@ from pinball_env.physics.data import (
     first_sensor,
 )
 from pinball_env.physics.flipper import flipper_distance, flipper_reach, sweep_flipper
+from pinball_env.physics.near import (
+    NEAR_DROP_TARGETS,
+    NEAR_FLIPPERS,
+    NEAR_SENSORS,
+    NEAR_SOLIDS,
+    gather_near,
+    near_reach,
+    path_in_zone,
+)
 from pinball_env.physics.sweep import (
     INF,
     norm,
@@ -92,14 +107,12 @@ SETTLE_ROUNDS = 8
 # The ball is moved without a sweep (out of a wedge) by at most this fraction of its radius, so
 # that it cannot pass through a wall that it overlaps by less.
 MAX_NUDGE = 0.25
-# A sweep whose box covers more broad-phase cells than this tests every element instead.
-MAX_GRID_CELLS = 64
 
 
 # --- contact response and the rules of a contact -------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def respond(vx, vy, spin, nx, ny, svx, svy, r, restitution, friction, kick, resting_speed):
     """Velocity and spin of the ball after a contact with normal n on a surface moving at sv.
 
@@ -131,7 +144,7 @@ def respond(vx, vy, spin, nx, ny, svx, svy, r, restitution, friction, kick, rest
     return vx, vy, spin, -vn
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def is_hit(speed, kick, resting_speed):
     """Whether a contact is a hit (a scoring event): the ball strikes the surface, rather than
     lying or rolling on it, or the surface kicks."""
@@ -215,7 +228,7 @@ def within_reach(x, y, r, flipper):
 # --- the flipper schedule ------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def flipper_motion(flipper, angle, energised):
     """Angular velocity and time to reach the commanded stop, for a flipper at ``angle``.
 
@@ -234,14 +247,14 @@ def flipper_motion(flipper, angle, energised):
     return target, omega, abs(target - angle) / speed
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def flipper_angle_at(start, omega, stop, time):
     """Angle of a flipper ``time`` seconds into a substep that it started at ``start``, turning
     at ``omega`` until ``stop``."""
     return start + omega * min(time, stop)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def flipper_end(start, target, omega, stop, held, held_time, h):
     """A flipper's angle and angular velocity at the end of a substep of ``h`` seconds, from its
     motion (:func:`flipper_motion`); a held flipper stops where it was ``held_time`` in."""
@@ -255,16 +268,24 @@ def flipper_end(start, target, omega, stop, held, held_time, h):
 # --- sweeping: the earliest contact --------------------------------------------------------------
 
 
-@njit(cache=True)
-def segment_contact(x, y, dx, dy, r, travel, x0, y0, x1, y1, bx, by, br, one_sided):
-    """:func:`sweep_segment`, after a cheap test: a segment whose bounding circle (bx, by, br)
-    is out of the sweep's reach (``travel`` its length) cannot be touched (``t = inf``)."""
-    mx = x - bx
-    my = y - by
-    reach = r + travel + br
+@njit(cache=True, inline="always")
+def segment_contact(x, y, dx, dy, r, travel, segment, bounds, one_sided):
+    """:func:`sweep_segment` of a segment (a row of ``Geometry.segments``), after two cheap
+    tests with its row of bounds (``data.segment_bounds``) that rule out most: a segment whose
+    bounding circle is out of the sweep's reach (``travel`` its length), or whose line the
+    path stays on one side of, farther than the ball's radius, cannot be touched (``t = inf``).
+    The margins cover rounding in these tests."""
+    mx = x - bounds[BOUND_X]
+    my = y - bounds[BOUND_Y]
+    reach = r + travel + bounds[BOUND_RADIUS]
     if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
-        return INF, 0.0, 0.0  # the margin covers rounding in this test
-    return sweep_segment(x, y, dx, dy, r, x0, y0, x1, y1, one_sided)
+        return INF, 0.0, 0.0
+    d0 = bounds[BOUND_NX] * x + bounds[BOUND_NY] * y - bounds[BOUND_OFFSET]
+    d1 = d0 + bounds[BOUND_NX] * dx + bounds[BOUND_NY] * dy
+    clear = r * (1.0 + 1e-9) + 1e-12
+    if (d0 > clear and d1 > clear) or (d0 < -clear and d1 < -clear):
+        return INF, 0.0, 0.0
+    return sweep_segment(x, y, dx, dy, r, segment[0], segment[1], segment[2], segment[3], one_sided)
 
 
 @njit(cache=True)
@@ -282,10 +303,8 @@ def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_o
     travel = math.sqrt(dx * dx + dy * dy)
     for j in range(segments.shape[0]):
         t, nx, ny = segment_contact(
-            x, y, dx, dy, r, travel, segments[j, 0], segments[j, 1], segments[j, 2],
-            segments[j, 3], segment_bounds[j, 0], segment_bounds[j, 1], segment_bounds[j, 2],
-            segment_one_sided[j],
-        )  # fmt: skip
+            x, y, dx, dy, r, travel, segments[j], segment_bounds[j], segment_one_sided[j]
+        )
         if t < best_t:
             best_t, best_nx, best_ny, best = t, nx, ny, j
     offset = segments.shape[0]  # first_circle: the circles' ids follow the segments'
@@ -296,58 +315,38 @@ def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_o
     return best_t, best_nx, best_ny, best
 
 
-@njit(cache=True)
-def grid_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles, grid, settings):
-    """:func:`earliest_static_contact` through the broad phase: only the segments and circles
-    listed in the grid cells that the sweep's bounding box (grown by the ball's radius)
-    overlaps are tested, each once (in the first of those cells that lists it). A sweep over
-    more than MAX_GRID_CELLS cells, or not finite, tests every element. The contacts are
-    bitwise those of testing every element: each test is the same computation, and ties go
-    to the lowest id either way."""
-    grow = r * (1.0 + 1e-9) + 1e-9  # the margin covers rounding in the box
-    lo_x, hi_x = min(x, x + dx) - grow, max(x, x + dx) + grow
-    lo_y, hi_y = min(y, y + dy) - grow, max(y, y + dy) + grow
-    columns, rows, size = settings.grid_columns, settings.grid_rows, settings.grid_cell
-    if not math.isfinite(lo_x + hi_x + lo_y + hi_y):
-        return earliest_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles)
-    c0 = min(max(math.floor(lo_x / size), 0), columns - 1)
-    c1 = min(max(math.floor(hi_x / size), 0), columns - 1)
-    r0 = min(max(math.floor(lo_y / size), 0), rows - 1)
-    r1 = min(max(math.floor(hi_y / size), 0), rows - 1)
-    if (c1 - c0 + 1) * (r1 - r0 + 1) > MAX_GRID_CELLS:
-        return earliest_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles)
-    items = columns * rows + 1  # the packed grid: starts, then ids, then spans
-    spans = items + grid[columns * rows]
-    n_segments = segments.shape[0]
+@njit(cache=True, inline="always")
+def near_static_contact(x, y, dx, dy, r, segments, bounds, one_sided, circles, near, count):
+    """:func:`earliest_static_contact` over the walls and posts of a candidate set: the first
+    ``count`` entries of ``near``, element ids in increasing order (see ``physics.near``). The
+    contacts are bitwise those of testing every element: each test is the same computation,
+    in the same order."""
+    best_t = INF
+    best_nx = 0.0
+    best_ny = 0.0
+    best = -1
     travel = math.sqrt(dx * dx + dy * dy)
-    best_t, best_nx, best_ny, best = INF, 0.0, 0.0, -1
-    for row in range(r0, r1 + 1):
-        for column in range(c0, c1 + 1):
-            cell = row * columns + column
-            for k in range(grid[cell], grid[cell + 1]):
-                e = grid[items + k]
-                first_column, first_row = grid[spans + 4 * e], grid[spans + 4 * e + 2]
-                if column != max(c0, first_column) or row != max(r0, first_row):
-                    continue  # tested in an earlier cell of the box
-                if e < n_segments:
-                    t, nx, ny = segment_contact(
-                        x, y, dx, dy, r, travel, segments[e, 0], segments[e, 1],
-                        segments[e, 2], segments[e, 3], bounds[e, 0], bounds[e, 1],
-                        bounds[e, 2], one_sided[e],
-                    )  # fmt: skip
-                else:
-                    c = e - n_segments
-                    t, nx, ny = sweep_circle(
-                        x, y, dx, dy, r, circles[c, 0], circles[c, 1], circles[c, 2]
-                    )
-                if t < best_t or (t == best_t and e < best):
-                    best_t, best_nx, best_ny, best = t, nx, ny, e
+    n_segments = segments.shape[0]
+    for k in range(count):
+        e = near[k]
+        if e < n_segments:
+            t, nx, ny = segment_contact(
+                x, y, dx, dy, r, travel, segments[e], bounds[e], one_sided[e]
+            )
+        else:
+            c = e - n_segments
+            t, nx, ny = sweep_circle(x, y, dx, dy, r, circles[c, 0], circles[c, 1], circles[c, 2])
+        if t < best_t:
+            best_t, best_nx, best_ny, best = t, nx, ny, e
     return best_t, best_nx, best_ny, best
 
 
-@njit(cache=True)
-def earliest_flipper_contact(x, y, vx, vy, duration, r, flippers, angles, omegas, stops, tol):
-    """Earliest contact of a ball moving at (vx, vy) for ``duration`` seconds with a flipper.
+@njit(cache=True, inline="always")
+def earliest_flipper_contact(
+    x, y, vx, vy, duration, r, flippers, angles, omegas, stops, tol, near, first, last
+):  # fmt: skip
+    """Earliest contact of a ball moving at (vx, vy) for ``duration`` seconds with a flipper
+    of a candidate set: those whose indexes are ``near[first:last]``, in increasing order.
 
     ``angles``, ``omegas`` and ``stops`` give each flipper's angle now, its angular velocity and
     when it reaches its stop. Returns ``(tau, nx, ny, svx, svy, flipper)`` with ``tau`` in
@@ -359,7 +358,8 @@ def earliest_flipper_contact(x, y, vx, vy, duration, r, flippers, angles, omegas
     best_svx = 0.0
     best_svy = 0.0
     best = -1
-    for j in range(flippers.shape[0]):
+    for k in range(first, last):
+        j = near[k]
         f = flippers[j]
         tau, nx, ny, svx, svy = sweep_flipper(
             x, y, vx, vy, duration, r,
@@ -375,7 +375,7 @@ def earliest_flipper_contact(x, y, vx, vy, duration, r, flippers, angles, omegas
 # --- sensors --------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sensor_crossing(x, y, dx, dy, sensor):
     """Fraction of the move (x, y) -> (x + dx, y + dy) at which the centre crosses a sensor.
 
@@ -457,20 +457,21 @@ def count_kickbacks(state, env, x, y, vx, vy, duration, kickbacks, lit, kickback
 
 
 @njit(cache=True)
-def sweep_drop_targets(state, env, geometry, x, y, dx, dy, r, t, nx, ny, svx, svy, element, cut):
+def sweep_drop_targets(
+    state, env, geometry, x, y, dx, dy, r, t, nx, ny, svx, svy, element, cut, near, start, stop
+):  # fmt: skip
     """The pass's earliest contact ``(t, nx, ny, svx, svy, element, cut)`` (as found over the
-    other solids) with env ``env``'s standing drop targets swept too, the ball moving from
-    (x, y) by (dx, dy); ties go to the lower id (the others')."""
+    other solids) with env ``env``'s standing drop targets of its candidate set (indexes
+    ``near[start:stop]``) swept too, the ball moving from (x, y) by (dx, dy); ties go to the
+    lower id (the others')."""
     targets, bounds, up = geometry.drop_targets, geometry.drop_target_bounds, state.targets_up
     travel = math.sqrt(dx * dx + dy * dy)
     first = first_drop_target(geometry)
-    for j in range(targets.shape[0]):
+    for k in range(start, stop):
+        j = near[k]
         if not up[env, j]:
             continue
-        d, b = targets[j], bounds[j]
-        tt, tnx, tny = segment_contact(
-            x, y, dx, dy, r, travel, d[0], d[1], d[2], d[3], b[0], b[1], b[2], False
-        )
+        tt, tnx, tny = segment_contact(x, y, dx, dy, r, travel, targets[j], bounds[j], False)
         if tt < t:
             t, nx, ny, svx, svy, element, cut = tt, tnx, tny, 0.0, 0.0, first + j, False
     return t, nx, ny, svx, svy, element, cut
@@ -619,7 +620,9 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     one_sided, circles = geometry.segment_one_sided, geometry.circles
     flippers, sensors = geometry.flippers, geometry.sensors
     n_flippers = flippers.shape[0]
-    broad_phase = settings.grid_columns * settings.grid_rows > 1
+    skin = settings.skin
+    gravity = norm(settings.gravity_x, settings.gravity_y)
+    near, near_ends, zone = scratch.near[env], scratch.near_ends[env], scratch.near_zone[env]
     angle, omega = state.flipper_angle, state.flipper_omega
     targets, omegas, stops = scratch.targets[env], scratch.omegas[env], scratch.stops[env]
     angles, pass_stops = scratch.angles[env], scratch.pass_stops[env]
@@ -671,22 +674,22 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 for j in range(n_flippers):
                     angles[j] = flipper_angle_at(angle[env, j], omegas[j], stops[j], elapsed)
                     pass_stops[j] = max(stops[j] - elapsed, 0.0)
-                if broad_phase:
-                    t, nx, ny, element = grid_static_contact(
-                        x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
-                        circles, geometry.grid, settings,
-                    )  # fmt: skip
-                else:
-                    t, nx, ny, element = earliest_static_contact(
-                        x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
-                        circles,
-                    )  # fmt: skip
+                # The candidate set (``physics.near``): gathered anew where the path leaves
+                # its zone.
+                if not path_in_zone(x, y, vx * remaining, vy * remaining, zone, r, skin):
+                    reach = near_reach(vx, vy, remaining, r, gravity, skin)
+                    gather_near(x, y, reach, geometry, near, near_ends, zone)
+                t, nx, ny, element = near_static_contact(
+                    x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
+                    circles, near, near_ends[NEAR_SOLIDS],
+                )  # fmt: skip
                 svx = svy = 0.0
                 cut = False
-                if n_flippers > 0:
+                if near_ends[NEAR_FLIPPERS] > near_ends[NEAR_SOLIDS]:
                     tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
-                        x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops, tol
-                    )
+                        x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops, tol,
+                        near, near_ends[NEAR_SOLIDS], near_ends[NEAR_FLIPPERS],
+                    )  # fmt: skip
                     if tau < t * remaining:  # a tie goes to the wall or post (lower id)
                         t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
                         element = flipper_id + flipper
@@ -695,7 +698,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 if has_targets:  # drop targets, spinners, kickbacks: see physics.targets
                     t, nx, ny, svx, svy, element, cut = sweep_drop_targets(
                         state, env, geometry, x, y, vx * remaining, vy * remaining, r, t, nx, ny,
-                        svx, svy, element, cut,
+                        svx, svy, element, cut, near, near_ends[NEAR_FLIPPERS],
+                        near_ends[NEAR_DROP_TARGETS],
                     )  # fmt: skip
                     used = remaining * min(t, 1.0)
                     kicked, used = cross_target_lines(
@@ -706,8 +710,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 # Sensor crossings on the way to the contact (or to the end of the substep),
                 # after a cheap test that rules out the common case.
                 crossed = False
-                for j in range(sensors.shape[0]):
-                    if sensor_crossing(x, y, vx * used, vy * used, sensors[j]) < INF:
+                for i in range(near_ends[NEAR_DROP_TARGETS], near_ends[NEAR_SENSORS]):
+                    if sensor_crossing(x, y, vx * used, vy * used, sensors[near[i]]) < INF:
                         crossed = True
                         break
                 if crossed:
@@ -818,7 +822,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     return math.isfinite(x + y + vx + vy + spin)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def step_world(geometry, settings, state, scratch, moving, start, stop):
     """Advance the envs from ``start`` to ``stop`` (``0, n_envs``: every env) for which
     ``moving`` ((n_envs,) bool) is set by one frame ``settings.dt`` in place, logging contacts
@@ -829,7 +833,9 @@ def step_world(geometry, settings, state, scratch, moving, start, stop):
     Envs are independent: each reads and writes only its own rows of ``state`` and
     ``scratch``. The GIL is released, so threads can step disjoint ranges of envs at once,
     with bitwise the results of one call. (The range is not optional: numba dispatches a call
-    that omits arguments some 40 times slower.)
+    that omits arguments some 40 times slower.) Compiled without reference counting
+    (``_nrt=False``): it allocates nothing, and numba's atomic counts of the arrays it takes
+    out of the records cost more than the physics (see ``game.play.play_frames``).
     """
     flipper_id = first_flipper(geometry)
     faults = 0

@@ -203,6 +203,7 @@ class World:
         if not self.tables.varied:
             self._entry = None  # the kernel now takes a table per env
         self._fit(*self.tables.set(env, table))
+        self.scratch.near_zone[env] = -1.0  # the candidate set was the old table's
         self.reset_targets(env)
         self.rest_flippers(env)
         self.place_ball(env, table.ball.start, table.ball.velocity)
@@ -221,6 +222,7 @@ class World:
             return wider
 
         n_targets, n_banks, n_spinners, n_kickbacks = targets
+        n_near = n_elements - n_spinners - n_kickbacks  # physics.data.near_size
         self.state = self.state._replace(
             hits=widen(self.state.hits, n_elements),
             targets_up=widen(self.state.targets_up, n_targets),
@@ -231,6 +233,7 @@ class World:
         self.scratch = self.scratch._replace(
             crossings=widen(self.scratch.crossings, n_sensors),
             hit_elements=widen(self.scratch.hit_elements, max_passes),
+            near=widen(self.scratch.near, n_near),
         )
 
     def step(self, buttons: np.ndarray | None = None, envs: np.ndarray | None = None) -> None:

@@ -24,10 +24,8 @@ import numpy as np
 from pinball_env.physics import (
     Geometry,
     Settings,
-    build_grid,
     columns,
     flipper_distance,
-    grid_layout,
     segment_bounds,
 )
 from pinball_env.table.reachable import CELL, free_space, touches
@@ -450,7 +448,9 @@ class Table:
         flipper_props = [self._props(flipper.material, 0.0) for flipper in self.flippers]
         return Geometry(
             segments=segments,
-            segment_bounds=_frozen_array(segment_bounds(segments), np.float64, (-1, 3)),
+            segment_bounds=_frozen_array(
+                segment_bounds(segments), np.float64, (-1, columns.BOUND_SIZE)
+            ),
             segment_props=_frozen_array(segment_props, np.float64, props),
             segment_one_sided=_frozen_array(one_sided, np.bool_, (-1,)),
             circles=_frozen_array(circles, np.float64, (-1, 3)),
@@ -459,9 +459,6 @@ class Table:
             flipper_props=_frozen_array(flipper_props, np.float64, props),
             sensors=_frozen_array([s.segment for s in self.sensors], np.float64, (-1, 4)),
             sensor_drain=_frozen_array([s.drain for s in self.sensors], np.bool_, (-1,)),
-            grid=_frozen_array(
-                build_grid(segments, circles, *self._grid_layout()), np.int64, (-1,)
-            ),
             cabinet=_frozen_array(self._cabinet_row(), np.float64, (-1, columns.CABINET_SIZE)),
             **self._pack_targets(),
         )
@@ -478,7 +475,9 @@ class Table:
         kickbacks = [[*k.segment, *k.kick] for k in self.kickbacks]  # columns KICKBACK_*
         return dict(
             drop_targets=_frozen_array(targets, np.float64, (-1, 4)),
-            drop_target_bounds=_frozen_array(segment_bounds(targets), np.float64, (-1, 3)),
+            drop_target_bounds=_frozen_array(
+                segment_bounds(targets), np.float64, (-1, columns.BOUND_SIZE)
+            ),
             drop_target_props=_frozen_array(props, np.float64, (-1, columns.PROP_SIZE)),
             drop_target_bank=_frozen_array(banks, np.int64, (-1,)),
             bank_reset=_frozen_array([b.reset_time for b in self.drop_targets], np.float64, (-1,)),
@@ -507,16 +506,10 @@ class Table:
         row[columns.BOB_GRAVITY] = self.gravity
         return [row]
 
-    def _grid_layout(self) -> tuple[float, int, int]:
-        n_elements = sum(len(wall.segments()) for wall in self.walls) + len(self.posts)
-        n_elements += len(self.standup_targets)
-        return grid_layout(n_elements, self.width, self.height, self.ball.radius)
-
     def pack_settings(self) -> Settings:
         """The kernel's simulation scalars for this table."""
         sim = self.simulation
         gravity_x, gravity_y = self.gravity_vector
-        cell, columns, rows = self._grid_layout()
         return Settings(
             gravity_x=gravity_x,
             gravity_y=gravity_y,
@@ -526,9 +519,6 @@ class Table:
             max_passes=sim.max_passes,
             skin=sim.skin,
             resting_speed=sim.resting_speed,
-            grid_cell=cell,
-            grid_columns=columns,
-            grid_rows=rows,
         )
 
     def _props(self, material: str, kick: float) -> list[float]:
