@@ -9,8 +9,15 @@ from gymnasium.utils.env_checker import check_env
 
 import pinball_env  # noqa: F401  (registers the envs)
 from pinball_env.envs import PinballEnv, PinballVectorEnv, layout_table
-from pinball_env.physics.rays import RAY_RANGE, cast_rays
-from pinball_env.table import load_table
+from pinball_env.physics.rays import (
+    RAY_RANGE,
+    cast_rays,
+    ray_circle,
+    ray_directions,
+    ray_flipper,
+    ray_segment,
+)
+from pinball_env.table import load_any_table, load_table
 
 
 def procgen_env(**kwargs):  # the env PinballProcgen-v0 makes
@@ -129,7 +136,7 @@ def test_rays_measure_the_distance_to_the_first_element():
     rest = np.radians([f.rest_angle for f in table.flippers])
     out = np.zeros(4)
     x, y = 0.2365, 0.45  # on the centre line, below the bottom bumper
-    cast_rays(x, y, 4, geometry, rest, out)
+    cast_rays(x, y, ray_directions(4), geometry, rest, out, *ray_work(geometry))
     up = 0.62 - 0.03 - y  # the bottom bumper's skirt
     left = x - 0.005  # the cabinet's left side (nothing in between at this height)
     assert out[1] == pytest.approx(up / RAY_RANGE)
@@ -138,8 +145,42 @@ def test_rays_measure_the_distance_to_the_first_element():
     # Down the centre line: between the flippers' tips, down to the drain area's floor (the
     # outline's bottom at y = 0.005), beyond RAY_RANGE? No: 0.445 m, within it.
     assert out[3] == pytest.approx((y - 0.005) / RAY_RANGE)
-    cast_rays(x, 0.08, 8, geometry, rest, out := np.zeros(8))
+    cast_rays(x, 0.08, ray_directions(8), geometry, rest, out := np.zeros(8), *ray_work(geometry))
     assert math.isclose(out[0], out[4], rel_tol=1e-9)  # the flippers are mirror images
+
+
+def ray_work(geometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """cast_rays's work arrays for ``geometry``."""
+    size = sum(len(a) for a in (geometry.segments, geometry.circles, geometry.flippers))
+    return np.empty(size), np.empty(size, dtype=np.int64), np.empty((len(geometry.flippers), 2))
+
+
+def rays_of_everything(x, y, n_rays, geometry, angles) -> np.ndarray:
+    """cast_rays's distances by testing every element for every ray (its tests, in Python)."""
+    out = np.empty(n_rays)
+    for k in range(n_rays):
+        a = 2.0 * math.pi * k / n_rays
+        dx, dy = math.cos(a), math.sin(a)
+        hits = [ray_segment.py_func(x, y, dx, dy, *s) for s in geometry.segments]
+        hits += [ray_circle.py_func(x, y, dx, dy, *c) for c in geometry.circles]
+        hits += [ray_flipper.py_func(x, y, dx, dy, f, math.cos(angle), math.sin(angle))
+                 for f, angle in zip(geometry.flippers, angles, strict=True)]  # fmt: skip
+        out[k] = min([RAY_RANGE, *hits]) / RAY_RANGE
+    return out
+
+
+@pytest.mark.parametrize("name", ["classic", "classic_v1", "procgen:3", "procgen:11"])
+def test_rays_read_bitwise_what_testing_every_element_reads(name):
+    table = load_any_table(name)
+    geometry = table.pack()
+    rng = np.random.default_rng(0)
+    angles = np.radians([f.rest_angle for f in table.flippers])
+    for _ in range(40):
+        x, y = rng.uniform(-0.1, table.width + 0.1), rng.uniform(-0.1, table.height + 0.1)
+        angles = angles + rng.uniform(-0.5, 0.5, size=len(angles))
+        out = np.zeros(16)
+        cast_rays(x, y, ray_directions(16), geometry, angles, out, *ray_work(geometry))
+        np.testing.assert_array_equal(out, rays_of_everything(x, y, 16, geometry, angles))
 
 
 def test_the_procgen_env_is_in_gymnasiums_registry():

@@ -10,57 +10,119 @@ and tip circles and the two sides between them.
 
 import math
 
+import numpy as np
 from numba import njit
 
 from pinball_env.physics.columns import (
     BALL_X,
     BALL_Y,
+    BOUND_RADIUS,
+    BOUND_X,
+    BOUND_Y,
     FLIPPER_BASE_RADIUS,
     FLIPPER_LENGTH,
     FLIPPER_PIVOT_X,
     FLIPPER_PIVOT_Y,
     FLIPPER_TIP_RADIUS,
 )
+from pinball_env.physics.flipper import flipper_reach
+from pinball_env.physics.sweep import norm, segment_offset
 
 # Rays see this far [m]; a ray that meets nothing reads 1.
 RAY_RANGE = 0.5
 
 
+# Kinds of the elements a ray meets (see cast_rays).
+_SEGMENT, _CIRCLE, _FLIPPER = 0, 1, 2
+# Rounding margin of the distance bounds by which cast_rays skips elements [relative].
+_MARGIN = 1e-9
+
+
 @njit(cache=True)
-def cast_rays(x, y, n_rays, geometry, flipper_angles, out):
-    """Distances from (x, y) along ``n_rays`` directions (0 = +x, evenly round the circle) to
-    the first wall, post or flipper (its capsule: base and tip circles and the two sides),
-    in RAY_RANGE (1: nothing within it), written to ``out``."""
+def cast_rays(x, y, directions, geometry, flipper_angles, out, bounds, order, sides):
+    """Distances from (x, y) along ``directions`` (:func:`ray_directions`) to the first wall,
+    post or flipper (its capsule at ``flipper_angles``: base and tip circles and the two
+    sides), in RAY_RANGE (1: nothing within it), written to ``out``.
+
+    Each ray's distance is the least over the elements, as tested one by one; the elements are
+    taken nearest first (by a lower bound of their distance from the point: ``bounds`` and
+    ``order``, work arrays as long as the table has walls, posts and flippers), and a ray stops
+    at the first whose bound is beyond what it has found, so the distances are bitwise those of
+    testing every element. ``sides``: a work array, (flippers, 2)."""
     segments, circles, flippers = geometry.segments, geometry.circles, geometry.flippers
-    for k in range(n_rays):
-        a = 2.0 * math.pi * k / n_rays
-        dx, dy = math.cos(a), math.sin(a)
+    segment_bounds = geometry.segment_bounds
+    n_segments, n_circles = segments.shape[0], circles.shape[0]
+    limit = RAY_RANGE * (1.0 + _MARGIN)
+    n = 0
+    for e in range(n_segments + n_circles + flippers.shape[0]):
+        if e < n_segments:
+            s = segments[e]
+            gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
+            bound = norm(gx, gy)
+        elif e < n_segments + n_circles:
+            c = circles[e - n_segments]
+            bound = norm(x - c[0], y - c[1]) - c[2]
+        else:
+            f = flippers[e - n_segments - n_circles]
+            reach = flipper_reach(f[FLIPPER_LENGTH], f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS])
+            bound = norm(x - f[FLIPPER_PIVOT_X], y - f[FLIPPER_PIVOT_Y]) - reach
+        if bound <= limit:  # (a non-finite point keeps every element)
+            bound = bound * (1.0 - _MARGIN) - 1e-12
+            i = n  # insertion sort, nearest first
+            while i > 0 and bounds[i - 1] > bound:
+                bounds[i], order[i] = bounds[i - 1], order[i - 1]
+                i -= 1
+            bounds[i], order[i] = bound, e
+            n += 1
+        elif not bound > limit:
+            bounds[n], order[n] = -math.inf, e
+            n += 1
+    for j in range(flippers.shape[0]):  # each flipper's direction, for every ray
+        sides[j, 0], sides[j, 1] = math.cos(flipper_angles[j]), math.sin(flipper_angles[j])
+    for k in range(directions.shape[0]):
+        dx, dy = directions[k, 0], directions[k, 1]
         best = RAY_RANGE
-        for j in range(segments.shape[0]):
-            x0, y0, x1, y1 = segments[j, 0], segments[j, 1], segments[j, 2], segments[j, 3]
-            best = min(best, _ray_segment(x, y, dx, dy, x0, y0, x1, y1))
-        for j in range(circles.shape[0]):
-            best = min(best, _ray_circle(x, y, dx, dy, circles[j, 0], circles[j, 1],
-                                         circles[j, 2]))  # fmt: skip
-        for j in range(flippers.shape[0]):
-            px, py = flippers[j, FLIPPER_PIVOT_X], flippers[j, FLIPPER_PIVOT_Y]
-            length = flippers[j, FLIPPER_LENGTH]
-            rb, rt = flippers[j, FLIPPER_BASE_RADIUS], flippers[j, FLIPPER_TIP_RADIUS]
-            ux, uy = math.cos(flipper_angles[j]), math.sin(flipper_angles[j])
-            tx, ty = px + length * ux, py + length * uy
-            best = min(best, _ray_circle(x, y, dx, dy, px, py, rb))
-            best = min(best, _ray_circle(x, y, dx, dy, tx, ty, rt))
-            for side in (-1.0, 1.0):  # the sides, as lines between the circles' edges
-                nx, ny = -side * uy, side * ux
-                side_hit = _ray_segment(
-                    x, y, dx, dy, px + nx * rb, py + ny * rb, tx + nx * rt, ty + ny * rt
-                )
-                best = min(best, side_hit)
+        for i in range(n):
+            if bounds[i] > best:
+                break
+            e = order[i]
+            if e < n_segments:
+                # A ray clear of the segment's bounding circle misses it.
+                bx, by = segment_bounds[e, BOUND_X] - x, segment_bounds[e, BOUND_Y] - y
+                miss = segment_bounds[e, BOUND_RADIUS] * (1.0 + _MARGIN) + 1e-12
+                if abs(bx * dy - by * dx) > miss or bx * dx + by * dy < -miss:
+                    continue
+                x0, y0, x1, y1 = segments[e, 0], segments[e, 1], segments[e, 2], segments[e, 3]
+                best = min(best, ray_segment(x, y, dx, dy, x0, y0, x1, y1))
+            elif e < n_segments + n_circles:
+                j = e - n_segments
+                best = min(best, ray_circle(x, y, dx, dy, circles[j, 0], circles[j, 1],
+                                             circles[j, 2]))  # fmt: skip
+            else:
+                j = e - n_segments - n_circles
+                best = min(best, ray_flipper(x, y, dx, dy, flippers[j], sides[j, 0], sides[j, 1]))
         out[k] = best / RAY_RANGE
 
 
 @njit(cache=True, inline="always")
-def _ray_segment(x, y, dx, dy, x0, y0, x1, y1):
+def ray_flipper(x, y, dx, dy, flipper, ux, uy):
+    """Distance along the ray to a flipper (a row of ``Geometry.flippers``) pointing along
+    (ux, uy) (the cosine and sine of its angle): its base and tip circles and the two sides
+    between them (inf: none)."""
+    px, py = flipper[FLIPPER_PIVOT_X], flipper[FLIPPER_PIVOT_Y]
+    length = flipper[FLIPPER_LENGTH]
+    rb, rt = flipper[FLIPPER_BASE_RADIUS], flipper[FLIPPER_TIP_RADIUS]
+    tx, ty = px + length * ux, py + length * uy
+    best = min(ray_circle(x, y, dx, dy, px, py, rb), ray_circle(x, y, dx, dy, tx, ty, rt))
+    for side in (-1.0, 1.0):  # the sides, as lines between the circles' edges
+        nx, ny = -side * uy, side * ux
+        side_hit = ray_segment(x, y, dx, dy, px + nx * rb, py + ny * rb, tx + nx * rt, ty + ny * rt)
+        best = min(best, side_hit)
+    return best
+
+
+@njit(cache=True, inline="always")
+def ray_segment(x, y, dx, dy, x0, y0, x1, y1):
     """Distance along the ray (x, y) + t (dx, dy), unit direction, to the segment (inf: none)."""
     ex, ey = x1 - x0, y1 - y0
     denominator = dx * ey - dy * ex
@@ -72,7 +134,7 @@ def _ray_segment(x, y, dx, dy, x0, y0, x1, y1):
 
 
 @njit(cache=True, inline="always")
-def _ray_circle(x, y, dx, dy, cx, cy, r):
+def ray_circle(x, y, dx, dy, cx, cy, r):
     """Distance along the ray to the circle (0 from inside it, inf: none)."""
     fx, fy = x - cx, y - cy
     c = fx * fx + fy * fy - r * r
@@ -85,9 +147,25 @@ def _ray_circle(x, y, dx, dy, cx, cy, r):
     return -b - math.sqrt(disc)
 
 
+@njit(cache=True)
+def ray_directions(n_rays):
+    """(n_rays, 2): the unit directions of ``n_rays`` rays, 0 = +x, evenly round the circle."""
+    directions = np.empty((n_rays, 2))
+    for k in range(n_rays):
+        a = 2.0 * math.pi * k / n_rays
+        directions[k, 0], directions[k, 1] = math.cos(a), math.sin(a)
+    return directions
+
+
 @njit(cache=True, nogil=True)
 def cast_all_rays(balls, geometries, angles, n_rays, out, start, stop):
     """:func:`cast_rays` for envs ``start`` to ``stop``, env i on ``geometries[i]``."""
+    size = 0
     for env in range(start, stop):
-        cast_rays(balls[env, BALL_X], balls[env, BALL_Y], n_rays, geometries[env], angles[env],
-                  out[env])  # fmt: skip
+        g = geometries[env]
+        size = max(size, g.segments.shape[0] + g.circles.shape[0] + g.flippers.shape[0])
+    bounds, order = np.empty(size), np.empty(size, dtype=np.int64)
+    directions, sides = ray_directions(n_rays), np.empty((angles.shape[1], 2))
+    for env in range(start, stop):
+        cast_rays(balls[env, BALL_X], balls[env, BALL_Y], directions, geometries[env],
+                  angles[env], out[env], bounds, order, sides)  # fmt: skip
