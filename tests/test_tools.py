@@ -24,8 +24,15 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "ratio_native1024_2thread_to_sync8_pymunk",
         "v1_native1024_2thread_steps_per_second",
         "ratio_v1_native1024_2thread_to_native1024_2thread",
+        "tablegen_ms_per_table",
+        "tablegen_targets_ms_per_table",
+        "sb3_ppo_env_steps_per_second",
+        "sb3_ppo_env_share",
+        "sb3_ppo_learner_share",
     ):
         assert saved[key] == result[key] > 0, key
+    assert saved["sb3_ppo_env_share"] + saved["sb3_ppo_learner_share"] == pytest.approx(1.0)
+    assert "compare" not in saved
     assert "native4096_1thread_steps_per_second" in capsys.readouterr().out
 
 

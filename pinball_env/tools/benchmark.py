@@ -1,5 +1,6 @@
 """Speed of the envs, the kernel, and references of this machine, in one run:
-``python -m pinball_env.tools.benchmark`` (``--quick`` for a short run, ``--json PATH``).
+``python -m pinball_env.tools.benchmark`` (``--quick`` for a short run, ``--json PATH``,
+``--compare REV`` for the same figures of a git revision, measured alternately in the same run).
 
 Measures, with uniformly random actions on the classic table (state observations unless said):
 
@@ -16,32 +17,60 @@ Measures, with uniformly random actions on the classic table (state observations
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
   references of this machine;
 - the kernel alone: microseconds per ball-frame and nanoseconds per ball-element sweep test;
+- table generation (``tablegen_ms_per_table``, ``tablegen_targets_ms_per_table``): milliseconds
+  per generated table, drawn, validated and checked for playability (``generate_table`` called
+  directly, no cache), the mean over 8 (``--quick``) or 32 seeds, without and with targets;
+- stable-baselines3 PPO training with the shipped ``configs/agents/ppo.yaml`` (its env, its
+  hyperparameters, its torch threads; no warm start, validation or checkpoints), 2 (``--quick``)
+  or 8 rollouts and updates timed after an untimed one: ``sb3_ppo_env_steps_per_second``, and
+  the shares of that wall time ``sb3_ppo_env_share`` (inside the VecEnv's ``step_async``,
+  ``step_wait`` and ``reset``, ``VecNormalize`` included: the env as SB3 sees it) and
+  ``sb3_ppo_learner_share`` (the rest: the policy's forward passes in the rollouts, the buffer
+  and its advantages, ``train()``'s epochs, SB3's bookkeeping);
 - start-up: import + make + first step with a warm numba cache, and with a cold one (compiling
   every kernel; skipped with ``--quick``), each in a fresh process;
 
-and the ratios between them, as a table and a JSON line. Timings are wall-clock on a shared
-machine: compare figures of one run, never across runs.
+and the ratios between them, as a table and a JSON line. A figure this version cannot measure
+(no stable-baselines3, an env or option an older revision lacks) is null. Timings are
+wall-clock on a shared machine: compare figures of one run, never across runs.
+
+``--compare REV`` measures every figure for the checkout (the package this module belongs to)
+and for git revision REV (``git archive``'d once into ``~/.cache/pinball-benchmark/SHA``), each
+measurement in a fresh process running this module's code against that tree's package, the
+two alternating measurement by measurement (``--repeats N``: N of each, the median kept). The
+table gains REV's column and the ratio checkout / REV (above 1: the checkout's rate is higher,
+or its time longer); the JSON gains ``"compare": {"rev", "sha", "repeats", "figures",
+"ratios", "errors"}``.
 """
 
 import argparse
+import inspect
 import json
 import math
 import os
 import platform
+import re
+import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-import pinball_env  # noqa: F401  (registers Pinball-v0)
+import pinball_env  # registers Pinball-v0
 from pinball_env.physics import first_sensor
-from pinball_env.sim.world import World
 from pinball_env.table import load_table
+
+try:
+    from pinball_env.sim.world import World
+except ImportError:  # an older revision's package (--compare): World's home was pinball_env.world
+    from pinball_env.world import World
 
 STARTUP = (
     "import time; start = time.perf_counter(); import gymnasium as gym, pinball_env; "
@@ -65,6 +94,25 @@ RATIOS = (
     ("single_swept", "cartpole_single"),
     ("single_swept", "single_pymunk"),
 )
+
+# The config whose training rate is measured, relative to the tree that holds the package.
+PPO_CONFIG = Path("configs/agents/ppo.yaml")
+SB3_FIGURES = ("sb3_ppo_env_steps_per_second", "sb3_ppo_env_share", "sb3_ppo_learner_share")
+TABLEGEN_FIGURES = ("tablegen_ms_per_table", "tablegen_targets_ms_per_table")
+# Generated tables' seeds start here (plus 1000 per --seed): seeds no test or config uses.
+TABLEGEN_SEED = 7_000_000
+
+# What --compare unpacks of a revision (those it has), and where.
+ARCHIVED = ("pinball_env", "agents", "configs")
+CACHE_ENV = "PINBALL_BENCHMARK_CACHE"  # overrides the cache folder
+
+Figures = dict[str, float | None]
+
+ANSI = re.compile(r"\x1b\[[0-9;]*m")  # the colours of numba's error messages
+
+
+class RevisionError(ValueError):
+    """``--compare``'s revision is not one of the checkout's repository."""
 
 
 def random_launches(world: World, rng: np.random.Generator, max_speed: float) -> None:
@@ -103,6 +151,92 @@ def measure_kernel(table: str, n_envs: int, frames: int, max_speed: float, seed:
     }
 
 
+def measure_tablegen(count: int, seed: int) -> Figures:
+    """Milliseconds per generated table: ``pinball_env.procgen.generate_table`` called directly
+    (every draw of the layout, its validation and the playability check on the kernel; no cache
+    in between) on ``count`` distinct seeds, the mean; then the same seeds with ``targets=True``.
+    One untimed table of another seed first (compiling or loading the kernels). Null where this
+    version's generator lacks the table generation or its ``targets``."""
+    try:
+        from pinball_env.procgen import generate_table
+    except ImportError:
+        return dict.fromkeys(TABLEGEN_FIGURES)
+    seeds = [TABLEGEN_SEED + 1000 * seed + i for i in range(count)]
+    variants = [("tablegen_ms_per_table", {})]
+    if "targets" in inspect.signature(generate_table).parameters:
+        variants.append(("tablegen_targets_ms_per_table", {"targets": True}))
+    result = dict.fromkeys(TABLEGEN_FIGURES)
+    for name, kwargs in variants:
+        generate_table(seeds[-1] + 1, **kwargs)  # outside the timing: the kernels' first calls
+        start = time.perf_counter()
+        for table_seed in seeds:
+            generate_table(table_seed, **kwargs)
+        result[name] = 1e3 * (time.perf_counter() - start) / count
+    return result
+
+
+def measure_sb3_ppo(iterations: int) -> Figures:
+    """stable-baselines3 PPO training with the shipped config (``PPO_CONFIG`` beside this
+    package), set up as ``agents.train`` does it (``load_config``, ``set_threads``: torch's
+    threads are the config's; ``make_env``; the algorithm with ``sb3_hyperparams``); one rollout
+    and update untimed, then ``iterations`` timed. Returns the env steps per second of the timed
+    ``learn`` call (wall time), the share of it inside the VecEnv's ``step_async``,
+    ``step_wait`` and ``reset`` (the whole chain SB3 steps, ``VecNormalize`` included), and the
+    rest, the learner's share. Null without torch and stable-baselines3, or without the config."""
+    root = Path(pinball_env.__file__).resolve().parent.parent
+    if not (root / PPO_CONFIG).is_file():
+        return dict.fromkeys(SB3_FIGURES)
+    try:
+        import stable_baselines3  # noqa: F401
+        import torch  # noqa: F401
+    except ImportError:
+        return dict.fromkeys(SB3_FIGURES)
+    if str(root) not in sys.path:  # the agents package beside pinball_env
+        sys.path.insert(0, str(root))
+    from agents.config import algorithm_class, load_config, sb3_hyperparams
+    from agents.train import set_threads
+
+    try:
+        from agents.envs import make_env
+    except ImportError:  # an older revision (--compare): make_env was in agents.common
+        from agents.common import make_env
+
+    config = load_config(root / PPO_CONFIG)
+    set_threads(config)
+    venv = make_env(config)
+    model = algorithm_class(config.algo)(
+        config.policy, venv, seed=config.seed, device=config.device, verbose=0,
+        **sb3_hyperparams(config),
+    )  # fmt: skip
+    rollout = model.n_steps * model.n_envs
+    model.learn(rollout)  # outside the timing: the kernels' first calls, the first reset
+    env = model.get_env()
+    in_env = [0.0]
+
+    def timed(call: Callable[..., Any]) -> Callable[..., Any]:
+        def timed_call(*args: Any, **kwargs: Any) -> Any:
+            start = time.perf_counter()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                in_env[0] += time.perf_counter() - start
+
+        return timed_call
+
+    for name in ("step_async", "step_wait", "reset"):
+        setattr(env, name, timed(getattr(env, name)))
+    before = model.num_timesteps
+    start = time.perf_counter()
+    model.learn(iterations * rollout, reset_num_timesteps=False)
+    seconds = time.perf_counter() - start
+    venv.close()
+    return {
+        "sb3_ppo_env_steps_per_second": (model.num_timesteps - before) / seconds,
+        "sb3_ppo_env_share": in_env[0] / seconds,
+        "sb3_ppo_learner_share": 1.0 - in_env[0] / seconds,
+    }
+
+
 def steps_per_second(env: gym.Env | gym.vector.VectorEnv, steps: int, seed: int) -> float:
     """Env-steps per second of ``env`` under uniformly random actions (a vector env's steps
     count once per env). Single envs are reset when their episode ends."""
@@ -138,7 +272,7 @@ def startup_seconds(cold: bool) -> float:
 
 
 def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]]:
-    """Every figure's name and the call that measures it."""
+    """Every steps-per-second figure's name and the call that measures it."""
     scale = 20 if quick else 1
 
     def steps(n: int) -> int:
@@ -175,21 +309,43 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
     for threads in (1, 2):  # the whole cabinet: plunger, nudges (random ones tilt), the bob
         figures.append((f"v1_native1024_{threads}thread",
                         lambda t=threads: native(1024, t, env_id="Pinball-v1")))  # fmt: skip
-    cartpole = gym.make("CartPole-v1")
-    cartpoles = gym.make_vec("CartPole-v1", num_envs=1024)
 
     def procgen(n: int, threads: int) -> float:
         env = gym.make_vec("PinballProcgen-v0", num_envs=n, num_threads=threads, num_layouts=16,
                            rays=16)  # fmt: skip
         return steps_per_second(env, steps(max(300, 300_000 // max(n, 100))), seed)
 
+    def cartpole(steps_: int, vector: bool) -> float:
+        env = gym.make_vec("CartPole-v1", num_envs=1024) if vector else gym.make("CartPole-v1")
+        return steps_per_second(env, steps(steps_), seed)
+
     figures += [
         ("procgen1024_16layouts_2thread", lambda: procgen(1024, 2)),
         ("native256_grayscale_2thread", lambda: native(256, 2, "grayscale")),
-        ("cartpole_single", lambda: steps_per_second(cartpole, steps(20000), seed)),
-        ("cartpole_vec1024", lambda: steps_per_second(cartpoles, steps(1000), seed)),
+        ("cartpole_single", lambda: cartpole(20000, vector=False)),
+        ("cartpole_vec1024", lambda: cartpole(1000, vector=True)),
     ]
     return figures
+
+
+def groups(quick: bool, seed: int) -> list[tuple[str, Callable[[], Figures]]]:
+    """Every measurement's name and the call that makes it, giving one figure or more: the
+    units that ``run`` goes through and ``--compare`` alternates (``--worker NAME`` runs one)."""
+
+    def rate(name: str, measure: Callable[[], float]) -> Callable[[], Figures]:
+        return lambda: {f"{name}_steps_per_second": measure()}
+
+    n_envs, frames = (256, 20) if quick else (1024, 300)
+    found = [(name, rate(name, measure)) for name, measure in measurements(quick, seed)]
+    found += [
+        ("kernel", lambda: measure_kernel("classic", n_envs, frames, 10.0, seed)),
+        ("tablegen", lambda: measure_tablegen(8 if quick else 32, seed)),
+        ("sb3_ppo", lambda: measure_sb3_ppo(2 if quick else 8)),
+        ("startup_warm", lambda: {"startup_warm_seconds": startup_seconds(cold=False)}),
+    ]
+    if not quick:
+        found.append(("startup_cold", lambda: {"startup_cold_seconds": startup_seconds(cold=True)}))
+    return found
 
 
 def progress(done: int, total: int, name: str) -> None:
@@ -199,43 +355,245 @@ def progress(done: int, total: int, name: str) -> None:
           file=sys.stderr, flush=True)  # fmt: skip
 
 
-def run(quick: bool = False, seed: int = 0) -> dict:
-    """All the figures (steps per second, seconds, ratios) as a dict."""
-    figures = measurements(quick, seed)
-    total = len(figures) + 3 - int(quick)
-    result: dict[str, object] = {}
-    for done, (name, measure) in enumerate(figures):
-        progress(done, total, name)
-        result[f"{name}_steps_per_second"] = measure()
-    progress(len(figures), total, "kernel")
-    n_envs, frames = (256, 20) if quick else (1024, 300)
-    result.update(measure_kernel("classic", n_envs, frames, 10.0, seed))
-    progress(len(figures) + 1, total, "start-up, warm cache")
-    result["startup_warm_seconds"] = startup_seconds(cold=False)
-    if not quick:
-        progress(len(figures) + 2, total, "start-up, cold cache")
-        result["startup_cold_seconds"] = startup_seconds(cold=True)
-    progress(total, total, "done")
-    print(file=sys.stderr)
-    rate = {key.removesuffix("_steps_per_second"): value for key, value in result.items()}
+def divide(numerator: object, denominator: object) -> float | None:
+    """``numerator / denominator``, or None where either is missing (or the denominator 0)."""
+    if not isinstance(numerator, (int, float)) or not isinstance(denominator, (int, float)):
+        return None
+    if isinstance(numerator, bool) or isinstance(denominator, bool) or denominator == 0:
+        return None
+    return numerator / denominator
+
+
+def finish(figures: Figures, quick: bool) -> dict:
+    """The figures with ``RATIOS`` (null where a figure is), the machine and the budget."""
+    result: dict[str, object] = dict(figures)
+    rate = {key.removesuffix("_steps_per_second"): value for key, value in figures.items()}
     for numerator, denominator in RATIOS:
-        result[f"ratio_{numerator}_to_{denominator}"] = rate[numerator] / rate[denominator]
+        result[f"ratio_{numerator}_to_{denominator}"] = divide(
+            rate.get(numerator), rate.get(denominator)
+        )
     result["machine"] = f"{platform.machine()}, {os.cpu_count()} cores"
     result["quick"] = quick
     return result
 
 
-def main(argv: list[str] | None = None) -> dict:
+def run(quick: bool = False, seed: int = 0) -> dict:
+    """All the figures (steps per second, seconds, ratios) as a dict, measured in this
+    process."""
+    todo = groups(quick, seed)
+    figures: Figures = {}
+    for done, (name, measure) in enumerate(todo):
+        progress(done, len(todo), name)
+        figures.update(measure())
+    progress(len(todo), len(todo), "done")
+    print(file=sys.stderr)
+    return finish(figures, quick)
+
+
+def worker(name: str, quick: bool, seed: int, out: Path) -> dict:
+    """Run the measurement ``name`` (of :func:`groups`) and write ``{"figures", "error",
+    "package"}`` to ``out`` as JSON: what ``--compare`` runs in a fresh process per tree.
+    An error (an API this tree's package lacks) is written, not raised: its figures are null."""
+    try:
+        figures, error = dict(groups(quick, seed))[name](), None
+    except Exception as exc:
+        figures, error = {}, f"{type(exc).__name__}: {exc}"
+    report = {
+        "figures": figures,
+        "error": error,
+        "package": str(Path(pinball_env.__file__).resolve().parent),
+    }
+    out.write_text(json.dumps(report))
+    return report
+
+
+def git(repo: Path, *args: str) -> str:
+    """The output of ``git -C repo ARGS``, stripped."""
+    return subprocess.run(
+        ["git", "-C", str(repo), *args], check=True, capture_output=True, text=True
+    ).stdout.strip()
+
+
+def cache_folder() -> Path:
+    """Where ``--compare`` keeps unpacked revisions: ``$PINBALL_BENCHMARK_CACHE``, else
+    ``~/.cache/pinball-benchmark`` (or under ``$XDG_CACHE_HOME``)."""
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pinball-benchmark"
+
+
+def unpack_revision(repo: Path, rev: str) -> tuple[str, Path]:
+    """The full sha of ``rev`` and a folder holding its ``ARCHIVED`` paths (``git archive``),
+    made once per sha under :func:`cache_folder` and reused."""
+    try:
+        sha = git(repo, "rev-parse", "--verify", f"{rev}^{{commit}}")
+    except subprocess.CalledProcessError as error:
+        raise RevisionError(f"{rev}: not a revision of {repo}: {error.stderr.strip()}") from None
+    cache = cache_folder()
+    tree = cache / sha
+    if (tree / "pinball_env" / "__init__.py").is_file():
+        return sha, tree
+    cache.mkdir(parents=True, exist_ok=True)
+    present = set(git(repo, "ls-tree", "--name-only", sha).split())
+    archive = subprocess.run(
+        ["git", "-C", str(repo), "archive", "--format=tar", sha,
+         *[path for path in ARCHIVED if path in present]],
+        check=True, capture_output=True,
+    ).stdout  # fmt: skip
+    partial = Path(tempfile.mkdtemp(prefix=f".{sha}-", dir=cache))
+    subprocess.run(["tar", "-x", "-C", str(partial)], input=archive, check=True)
+    try:
+        partial.rename(tree)  # whole or not at all
+    except OSError:  # another run unpacked it meanwhile
+        shutil.rmtree(partial)
+    return sha, tree
+
+
+def run_worker(
+    script: Path, tree: Path, name: str, quick: bool, seed: int
+) -> tuple[Figures, str | None]:
+    """Measure ``name`` in a fresh process: ``script`` (this module's code) run with ``tree``
+    first on ``PYTHONPATH`` and as the working folder, so that ``pinball_env`` (and ``agents``)
+    are that tree's. Returns the figures and the error (None if none)."""
+    environment = dict(os.environ)
+    environment["PYTHONPATH"] = os.pathsep.join(
+        filter(None, [str(tree), environment.get("PYTHONPATH")])
+    )
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder) / "figures.json"
+        command = [sys.executable, str(script), "--worker", name, "--json-out", str(out),
+                   "--seed", str(seed), *(["--quick"] if quick else [])]  # fmt: skip
+        done = subprocess.run(command, cwd=tree, env=environment, capture_output=True, text=True)
+        if done.returncode != 0 or not out.is_file():
+            tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
+            return {}, f"exit status {done.returncode}: {tail}"
+        report = json.loads(out.read_text())
+    expected = (tree / "pinball_env").resolve()
+    if Path(report["package"]) != expected:
+        raise RuntimeError(f"{name}: the worker imported {report['package']}, not {expected}")
+    return report["figures"], report["error"]
+
+
+def median(values: list[float | None]) -> float | None:
+    """The median of the values measured (None if none was)."""
+    measured = [value for value in values if value is not None]
+    return statistics.median(measured) if measured else None
+
+
+def compare(rev: str, quick: bool = False, seed: int = 0, repeats: int = 1) -> dict:
+    """Every figure for the checkout and for ``rev``, each measurement in a fresh process per
+    tree, the two alternating (which goes first alternates too), ``repeats`` times each, the
+    median kept: :func:`finish`'s dict of the checkout with ``"compare"`` added."""
+    checkout = Path(pinball_env.__file__).resolve().parent.parent
+    sha, tree = unpack_revision(checkout, rev)
+    names = [name for name, _ in groups(quick, seed)]
+    trees = {"checkout": checkout, "rev": tree}
+    values: dict[str, dict[str, list[float | None]]] = {"checkout": {}, "rev": {}}
+    keys: dict[str, None] = {}  # the figures in the order measured, either tree's
+    errors: dict[str, dict[str, str]] = {"checkout": {}, "rev": {}}
+    total = len(names) * repeats * 2
+    with tempfile.TemporaryDirectory() as folder:
+        script = Path(folder) / "pinball_benchmark.py"  # this code, whichever package it meets
+        shutil.copyfile(__file__, script)
+        done = 0
+        for repeat in range(repeats):
+            for index, name in enumerate(names):
+                order = ("checkout", "rev") if (index + repeat) % 2 == 0 else ("rev", "checkout")
+                for side in order:
+                    progress(done, total, f"{name} ({side})")
+                    figures, error = run_worker(script, trees[side], name, quick, seed)
+                    if error is not None:
+                        errors[side][name] = ANSI.sub("", error).strip()
+                    for key, value in figures.items():
+                        keys[key] = None
+                        values[side].setdefault(key, []).append(value)
+                    done += 1
+    progress(total, total, "done")
+    print(file=sys.stderr)
+    ours = finish({key: median(values["checkout"].get(key, [])) for key in keys}, quick)
+    theirs = finish({key: median(values["rev"].get(key, [])) for key in keys}, quick)
+    del theirs["machine"], theirs["quick"]
+    ours["compare"] = {
+        "rev": rev,
+        "sha": sha,
+        "repeats": repeats,
+        "figures": theirs,
+        "ratios": {key: divide(ours[key], theirs[key]) for key in theirs},
+        "errors": errors,
+    }
+    return ours
+
+
+def shown(value: object) -> str:
+    """A figure as the table prints it."""
+    if value is None:
+        return "null"
+    return f"{value:,.4g}" if isinstance(value, float) else str(value)
+
+
+def table(result: dict) -> str:
+    """The figures as lines of text: name and value, and with ``"compare"`` the revision's
+    value and the ratio checkout / revision."""
+    keys = [key for key in result if key != "compare"]
+    width = max(map(len, keys))
+    if "compare" not in result:
+        return "\n".join(f"{key:<{width}}  {shown(result[key])}" for key in keys)
+    other = result["compare"]
+    rev, sha = other["rev"], other["sha"]
+    label = rev if sha.startswith(rev) else f"{rev} ({sha[:7]})"
+    column = max(len(label), 12)
+    lines = [f"{'figure':<{width}}  {'checkout':>12}  {label:>{column}}  {'ratio':>7}"]
+    for key in keys:
+        if key in other["figures"]:
+            lines.append(
+                f"{key:<{width}}  {shown(result[key]):>12}  "
+                f"{shown(other['figures'][key]):>{column}}  {shown(other['ratios'][key]):>7}"
+            )
+        else:
+            lines.append(f"{key:<{width}}  {shown(result[key]):>12}")
+    for side, failed in other["errors"].items():
+        for name, error in failed.items():  # the first line (the JSON has the whole message)
+            lines.append(f"{name} failed on {label if side == 'rev' else side}: "
+                         f"{error.splitlines()[0][:120]}")  # fmt: skip
+    return "\n".join(lines)
+
+
+def parser() -> argparse.ArgumentParser:
+    """The command line."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="short run (about 20x fewer steps)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the figures to this file")
-    args = parser.parse_args(argv)
-    result = run(args.quick, args.seed)
-    width = max(map(len, result))
-    for key, value in result.items():
-        shown = f"{value:,.4g}" if isinstance(value, float) else value
-        print(f"{key:<{width}}  {shown}")
+    parser.add_argument(
+        "--compare", metavar="REV",
+        help="also measure git revision REV, alternating with the checkout, and the ratios",
+    )  # fmt: skip
+    parser.add_argument(
+        "--repeats", type=int, default=1,
+        help="with --compare: measurements of each figure per tree (the median is kept)",
+    )  # fmt: skip
+    parser.add_argument("--worker", metavar="NAME", help=argparse.SUPPRESS)
+    parser.add_argument("--json-out", type=Path, help=argparse.SUPPRESS)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> dict:
+    command = parser()
+    args = command.parse_args(argv)
+    if args.repeats < 1:
+        command.error("--repeats must be 1 or more")
+    if args.worker is not None:
+        if args.json_out is None:
+            command.error("--worker needs --json-out")
+        return worker(args.worker, args.quick, args.seed, args.json_out)
+    if args.compare is not None:
+        try:
+            result = compare(args.compare, args.quick, args.seed, args.repeats)
+        except RevisionError as error:
+            command.error(f"--compare {error}")
+    else:
+        result = run(args.quick, args.seed)
+    print(table(result))
     print(json.dumps(result))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
