@@ -4,7 +4,8 @@
 
 Measures, with uniformly random actions on the classic table (state observations unless said):
 
-- ``Pinball-v0`` through ``gym.make``, on the swept kernel and on pymunk;
+- ``Pinball-v0`` through ``gym.make``, on the swept kernel and on pymunk, and the swept one
+  bare (``.unwrapped``: gym.make's wrappers measured apart);
 - Gymnasium's ``SyncVectorEnv`` of 8 of each;
 - the native vector env (``gym.make_vec``) at N = 1, 64, 1024 and 4096 envs with 1 and 2
   threads, and at N = 256 with 84x84 grayscale observations;
@@ -92,6 +93,7 @@ RATIOS = (
     ("procgen1024_16layouts_2thread", "native1024_2thread"),
     ("v1_native1024_2thread", "native1024_2thread"),
     ("single_swept", "cartpole_single"),
+    ("single_swept", "single_swept_unwrapped"),
     ("single_swept", "single_pymunk"),
 )
 
@@ -278,8 +280,9 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
     def steps(n: int) -> int:
         return max(n // scale, 4)
 
-    def single(physics: str) -> float:
-        env = gym.make("Pinball-v0", physics=physics)
+    def single(physics: str, unwrapped: bool = False) -> float:
+        env = gym.make("Pinball-v0", physics=physics)  # gym.make's wrappers, or the bare env
+        env = env.unwrapped if unwrapped else env
         return steps_per_second(env, steps(5000 if physics == "swept" else 1000), seed)
 
     def sync(physics: str) -> float:
@@ -297,6 +300,7 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
 
     figures: list[tuple[str, Callable[[], float]]] = [
         ("single_swept", lambda: single("swept")),
+        ("single_swept_unwrapped", lambda: single("swept", unwrapped=True)),
         ("single_pymunk", lambda: single("pymunk")),
         ("sync8_swept", lambda: sync("swept")),
         ("sync8_pymunk", lambda: sync("pymunk")),
