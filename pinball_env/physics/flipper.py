@@ -20,7 +20,7 @@ import math
 
 from numba import njit
 
-from pinball_env.physics.sweep import INF, norm, sweep_point, sweep_segment
+from pinball_env.physics.sweep import INF, norm, segment_offset, sweep_point, sweep_segment
 
 # Most slices one flipper sweep may take. A ball at 10 m/s next to a flipper at full swing needs
 # about 30 per substep and one at 1 km/s about 300; the cap bounds the work at any speed.
@@ -131,7 +131,13 @@ def sweep_flipper(cx, cy, vx, vy, duration, r, px, py, length, rb, rt, angle0, o
     """
     speed = norm(vx, vy)
     dist = norm(cx - px, cy - py)
-    if dist - speed * duration > flipper_reach(length, rb, rt) + r + 2.0 * tol:
+    clear = flipper_reach(length, rb, rt) + r + 2.0 * tol
+    if dist - speed * duration > clear:
+        return INF, 0.0, 0.0, 0.0, 0.0
+    # A path that passes the pivot farther than that (and a rounding margin) misses the
+    # flipper at any angle: the slices' chords lie within tol of it.
+    gx, gy = segment_offset(px, py, cx, cy, cx + vx * duration, cy + vy * duration)
+    if gx * gx + gy * gy > (clear + 1e-9) * (clear + 1e-9):
         return INF, 0.0, 0.0, 0.0, 0.0
     rho = dist + speed * duration
     tau_a = 0.0
