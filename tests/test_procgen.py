@@ -2,6 +2,7 @@
 
 import dataclasses
 import hashlib
+import importlib
 import json
 import math
 import pickle
@@ -16,6 +17,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env import procgen
+from pinball_env.physics import first_flipper, point_segment_distance
+from pinball_env.physics.columns import BALL_X, BALL_Y, CONTACT_ELEMENT
 from pinball_env.procgen import (
     generate,
     generate_table,
@@ -24,8 +27,12 @@ from pinball_env.procgen import (
     playability,
     table_name,
 )
+from pinball_env.procgen.obstacles import segment_distance
 from pinball_env.sim.world import World
 from pinball_env.table import TableError, dump_table, load_table, table_from_dict, table_to_dict
+
+# The playability check's module (the package's ``playability`` is its function).
+checks = importlib.import_module("pinball_env.procgen.playability")
 
 seeds = st.integers(0, 2**40)
 difficulties = st.sampled_from(procgen.DIFFICULTIES)
@@ -105,9 +112,9 @@ def test_a_rejected_draw_is_redrawn_from_a_derived_seed():
     assert playability(first, rng) is not None
 
 
-def test_playability_finds_a_pocket_that_holds_a_ball():
-    # A V of walls, open upwards, put in the most open place of the upper field.
-    table = generate_table(3)
+def _trapped(table):
+    """``table`` with a V of walls, open upwards, put in the most open place of the upper
+    field: a pocket that holds a ball."""
     data = table_to_dict(table)
     obstacles = procgen._Obstacles()
     for wall in table.walls:
@@ -122,8 +129,12 @@ def test_playability_finds_a_pocket_that_holds_a_ball():
         {"name": "trap", "points": [[x - 0.04, y + 0.04], [x, y], [x + 0.04, y + 0.04]],
          "material": "wall"}
     )  # fmt: skip
-    trapped = table_from_dict(data)
-    problem = playability(trapped, np.random.default_rng(0), drops=400)
+    return table_from_dict(data)
+
+
+def test_playability_finds_a_pocket_that_holds_a_ball():
+    table = generate_table(3)
+    problem = playability(_trapped(table), np.random.default_rng(0), drops=400)
     assert problem is not None and "rests at" in problem, problem
     assert playability(table, np.random.default_rng(0), drops=400) is None
 
@@ -133,6 +144,85 @@ def test_playability_finds_a_plunger_too_weak_to_enter_the_field():
     data["plunger"]["speed"] = [0.5, 0.6]
     problem = playability(table_from_dict(data), np.random.default_rng(0))
     assert problem == "a plunger shot does not enter the playfield"
+
+
+def _roll_frame_by_frame(table, starts, lane_x):
+    """The check's roll as first written: every ball stepped together, frame by frame, in a
+    World of one env per ball, stopping at the first ball at rest."""
+    n, radius = len(starts.balls), table.ball.radius
+    world = World(table, n)
+    for env, (position, velocity) in enumerate(starts.balls):
+        world.place_ball(env, position, velocity)
+    flippers = first_flipper(world.geometry) + np.arange(len(table.flippers))
+    entered, touched = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    anchor = world.balls[:, [BALL_X, BALL_Y]].copy()
+    still = np.zeros(n, dtype=np.int64)
+    frame_rate = table.simulation.frame_rate
+    for _ in range(round(checks.DRAIN_TIME * frame_rate)):
+        world.step()
+        active = world.active
+        if not active.any():
+            break
+        position = world.balls[:, [BALL_X, BALL_Y]]
+        entered |= active & (position[:, 0] < lane_x - radius)
+        for env in np.flatnonzero(active):
+            ids = world.state.contacts[env, : world.state.contact_count[env], CONTACT_ELEMENT]
+            touched[env] |= np.isin(ids, flippers).any()
+        moved = np.hypot(*(position - anchor).T) >= radius
+        anchor[moved] = position[moved]
+        still = np.where(moved | ~active, 0, still + 1)
+        if (still >= round(checks.REST_TIME * frame_rate)).any():
+            env = int(np.argmax(still))
+            if env < starts.launches and not entered[env]:
+                return "a plunger shot does not enter the playfield"
+            return f"a ball rests at ({position[env, 0]:.3f}, {position[env, 1]:.3f})"
+    if world.active.any():
+        x, y = starts.balls[int(np.argmax(world.active))][0]
+        return f"a ball from ({x:.3f}, {y:.3f}) has not drained in {checks.DRAIN_TIME:g} s"
+    return entered, touched
+
+
+@pytest.mark.parametrize(("drain_time", "rest_time"), [(60.0, 10.0), (1.5, 10.0), (60.0, 0.4)])
+def test_the_check_rolls_each_ball_as_when_all_were_stepped_together(
+    drain_time, rest_time, monkeypatch
+):
+    # The compiled roll takes the balls one by one to their ends; its verdict, and which balls
+    # entered the playfield and touched a flipper, are those of stepping every ball together
+    # frame by frame. Short times make balls that have not drained, or that rest.
+    weak = table_to_dict(generate_table(4))
+    weak["plunger"]["speed"] = [0.5, 1.5]
+    tables = [generate_table(3), _trapped(generate_table(3)), table_from_dict(weak)]
+    tables.append(generate_table(2, targets=True))
+    monkeypatch.setattr(checks, "DRAIN_TIME", drain_time)
+    monkeypatch.setattr(checks, "REST_TIME", rest_time)
+    verdicts = set()
+    for table in tables:
+        lane_x = min(s[0] for s in checks._lane_walls(table))
+        space = table.free_space
+        starts = checks._starts(table, np.random.default_rng(0), 24, lane_x, space)
+        expected = _roll_frame_by_frame(table, starts, lane_x)
+        outcome = checks._roll(table, starts, lane_x)
+        if isinstance(expected, str):
+            assert outcome == expected
+        else:
+            assert not isinstance(outcome, str), outcome
+            np.testing.assert_array_equal(outcome[0], expected[0])
+            np.testing.assert_array_equal(outcome[1], expected[1])
+        verdicts.add(expected if isinstance(expected, str) else None)
+    assert verdicts - {None}, "some table should fail the check"
+
+
+def test_obstacles_segment_gap_is_the_smallest_gap():
+    rng = np.random.default_rng(0)
+    obstacles = procgen.Obstacles()
+    for _ in range(12):  # the gaps follow the obstacles as they are added
+        obstacles.add_wall(rng.uniform(0.0, 0.5, (3, 2)).tolist(), closed=bool(rng.random() < 0.5))
+        obstacles.add_circle(rng.uniform(0.0, 0.5, 2).tolist(), float(rng.uniform(0.005, 0.03)))
+        segment = tuple(rng.uniform(0.0, 0.5, 4).tolist())
+        gaps = [segment_distance(segment, s) for s in obstacles.segments]
+        gaps += [point_segment_distance(x, y, *segment) - r for x, y, r in obstacles.circles]
+        assert obstacles.segment_gap(segment) == min(gaps)
+    assert procgen.Obstacles().segment_gap((0.0, 0.0, 1.0, 1.0)) == math.inf
 
 
 def test_tables_by_name():

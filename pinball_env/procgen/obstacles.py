@@ -6,6 +6,9 @@ from __future__ import annotations
 import itertools
 import math
 
+import numpy as np
+from numba import njit
+
 from pinball_env.physics import point_segment_distance
 
 
@@ -25,6 +28,8 @@ class Obstacles:
     def __init__(self) -> None:
         self.segments: list[tuple[float, float, float, float]] = []
         self.circles: list[tuple[float, float, float]] = []
+        # The lists as arrays, for the compiled gaps, kept until they grow.
+        self._rows = (np.empty((0, 4)), np.empty((0, 3)))
 
     def add_wall(self, points: list[list[float]], closed: bool = False) -> None:
         ends = points + points[:1] if closed else points
@@ -42,24 +47,45 @@ class Obstacles:
 
     def segment_gap(self, segment: tuple[float, float, float, float]) -> float:
         """The smallest gap between a segment and everything placed."""
-        gaps = [segment_distance(segment, s) for s in self.segments]
-        gaps += [point_segment_distance(cx, cy, *segment) - r for cx, cy, r in self.circles]
-        return min(gaps, default=math.inf)
+        segments, circles = self._rows
+        if len(segments) != len(self.segments) or len(circles) != len(self.circles):
+            segments = np.array(self.segments, dtype=np.float64).reshape(-1, 4)
+            circles = np.array(self.circles, dtype=np.float64).reshape(-1, 3)
+            self._rows = segments, circles
+        return _segment_gap(np.array(segment, dtype=np.float64), segments, circles)
 
 
+@njit(cache=True)
+def _segment_gap(segment: np.ndarray, segments: np.ndarray, circles: np.ndarray) -> float:
+    """:meth:`Obstacles.segment_gap` of ``segment`` (4,) with ``segments`` (n, 4) and
+    ``circles`` (m, 3) placed, compiled: layouts try many places against many elements."""
+    x0, y0, x1, y1 = segment[0], segment[1], segment[2], segment[3]
+    gap = math.inf
+    for s in segments:
+        gap = min(gap, segment_distance((x0, y0, x1, y1), (s[0], s[1], s[2], s[3])))
+    for cx, cy, r in circles:
+        gap = min(gap, point_segment_distance(cx, cy, x0, y0, x1, y1) - r)
+    return gap
+
+
+@njit(cache=True)
+def _side(px: float, py: float, qx: float, qy: float, rx: float, ry: float) -> float:
+    """Which side of the line P-Q the point R is on (the sign), twice the triangle's area."""
+    return (qx - px) * (ry - py) - (qy - py) * (rx - px)
+
+
+@njit(cache=True)
 def segment_distance(a: tuple[float, ...], b: tuple[float, ...]) -> float:
     """Distance between two segments (0 if they cross)."""
     ax0, ay0, ax1, ay1 = a
     bx0, by0, bx1, by1 = b
-
-    def side(px: float, py: float, qx: float, qy: float, rx: float, ry: float) -> float:
-        return (qx - px) * (ry - py) - (qy - py) * (rx - px)
-
-    d1, d2 = side(ax0, ay0, ax1, ay1, bx0, by0), side(ax0, ay0, ax1, ay1, bx1, by1)
-    d3, d4 = side(bx0, by0, bx1, by1, ax0, ay0), side(bx0, by0, bx1, by1, ax1, ay1)
+    d1, d2 = _side(ax0, ay0, ax1, ay1, bx0, by0), _side(ax0, ay0, ax1, ay1, bx1, by1)
+    d3, d4 = _side(bx0, by0, bx1, by1, ax0, ay0), _side(bx0, by0, bx1, by1, ax1, ay1)
     if d1 * d2 < 0.0 and d3 * d4 < 0.0:
         return 0.0
     return min(
-        point_segment_distance(ax0, ay0, *b), point_segment_distance(ax1, ay1, *b),
-        point_segment_distance(bx0, by0, *a), point_segment_distance(bx1, by1, *a),
-    )  # fmt: skip
+        point_segment_distance(ax0, ay0, bx0, by0, bx1, by1),
+        point_segment_distance(ax1, ay1, bx0, by0, bx1, by1),
+        point_segment_distance(bx0, by0, ax0, ay0, ax1, ay1),
+        point_segment_distance(bx1, by1, ax0, ay0, ax1, ay1),
+    )
