@@ -453,6 +453,17 @@ def unpack_revision(repo: Path, rev: str) -> tuple[str, Path]:
     return sha, tree
 
 
+# A worker's start: without an editable install's import hooks, which would serve a module that
+# the tree lacks (an old revision's) from the checkout, and mix the two.
+WORKER_BOOT = (
+    "import runpy, sys; "
+    "sys.meta_path[:] = [f for f in sys.meta_path "
+    "if not getattr(f, '__module__', '').startswith('__editable__')]; "
+    "sys.path[:] = [p for p in sys.path if not p.startswith('__editable__')]; "
+    "sys.argv = sys.argv[1:]; runpy.run_path(sys.argv[0], run_name='__main__')"
+)
+
+
 def run_worker(
     script: Path, tree: Path, name: str, quick: bool, seed: int
 ) -> tuple[Figures, str | None]:
@@ -465,8 +476,9 @@ def run_worker(
     )
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "figures.json"
-        command = [sys.executable, str(script), "--worker", name, "--json-out", str(out),
-                   "--seed", str(seed), *(["--quick"] if quick else [])]  # fmt: skip
+        command = [sys.executable, "-c", WORKER_BOOT, str(script), "--worker", name,
+                   "--json-out", str(out), "--seed", str(seed),
+                   *(["--quick"] if quick else [])]  # fmt: skip
         done = subprocess.run(command, cwd=tree, env=environment, capture_output=True, text=True)
         if done.returncode != 0 or not out.is_file():
             tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
