@@ -6,11 +6,13 @@ Each frame of length ``dt`` is cut into fixed substeps. In a substep the flipper
 commands (kinematic: a constant angular speed towards the stop the command selects, see
 :func:`flipper_motion`), gravity updates the ball's velocity (semi-implicit Euler), then the ball
 sweeps along its straight path and stops at the earliest contact over all walls, posts and
-flippers (ties go to the lowest element id: :func:`earliest_static_contact`,
-:func:`earliest_flipper_contact`), responds, and sweeps the remaining time again: the contact
-passes. A pass cap and a minimum-progress rule end the passes for a wedged ball: the rest of that
-substep is dropped, never skipped over, so the ball can stall for an instant but cannot tunnel;
-a flipper pushing a wedged ball stalls too, as a real coil does (:func:`release_wedge`).
+flippers (ties go to the lowest element id: :func:`near_static_contact`,
+:func:`earliest_flipper_contact`; only the ball's candidate set is swept, ``physics.near``,
+which holds every element its path can touch), responds, and sweeps the remaining time again:
+the contact passes. A pass cap and a minimum-progress rule end the passes for a wedged ball:
+the rest of that substep is dropped, never skipped over, so the ball can stall for an instant
+but cannot tunnel; a flipper pushing a wedged ball stalls too, as a real coil does
+(:func:`release_wedge`).
 Only a turning flipper or a wedge can leave the ball inside a surface, so after a substep in
 which the ball touched a turning flipper or was wedged, its deepest overlap is measured
 (:func:`deepest_overlap`); a ball deeper than the skin is pushed clear (:func:`settle`), and
@@ -112,7 +114,7 @@ MAX_NUDGE = 0.25
 # --- contact response and the rules of a contact -------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def respond(vx, vy, spin, nx, ny, svx, svy, r, restitution, friction, kick, resting_speed):
     """Velocity and spin of the ball after a contact with normal n on a surface moving at sv.
 
@@ -144,7 +146,7 @@ def respond(vx, vy, spin, nx, ny, svx, svy, r, restitution, friction, kick, rest
     return vx, vy, spin, -vn
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def is_hit(speed, kick, resting_speed):
     """Whether a contact is a hit (a scoring event): the ball strikes the surface, rather than
     lying or rolling on it, or the surface kicks."""
@@ -228,7 +230,7 @@ def within_reach(x, y, r, flipper):
 # --- the flipper schedule ------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def flipper_motion(flipper, angle, energised):
     """Angular velocity and time to reach the commanded stop, for a flipper at ``angle``.
 
@@ -247,14 +249,14 @@ def flipper_motion(flipper, angle, energised):
     return target, omega, abs(target - angle) / speed
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def flipper_angle_at(start, omega, stop, time):
     """Angle of a flipper ``time`` seconds into a substep that it started at ``start``, turning
     at ``omega`` until ``stop``."""
     return start + omega * min(time, stop)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def flipper_end(start, target, omega, stop, held, held_time, h):
     """A flipper's angle and angular velocity at the end of a substep of ``h`` seconds, from its
     motion (:func:`flipper_motion`); a held flipper stops where it was ``held_time`` in."""
@@ -375,7 +377,7 @@ def earliest_flipper_contact(
 # --- sensors --------------------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def sensor_crossing(x, y, dx, dy, sensor):
     """Fraction of the move (x, y) -> (x + dx, y + dy) at which the centre crosses a sensor.
 
