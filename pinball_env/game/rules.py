@@ -301,20 +301,31 @@ class Game:
         and a scatter drawn from ``rng``; else the machine's launch, at a speed drawn from the
         table's range (the next ball, or with the player's plunger the ball search's launch of
         a ball left in the shooter lane)."""
-        plunger = self.world.table_of(env).plunger
-        if self._progress.plunge[env]:
-            self._progress.plunge[env] = False
-            scatter = float(rng.uniform(-plunger.scatter, plunger.scatter))
-            self.world.launch(env, plunger.launch_speed(self.state.plunger_pull[env]) + scatter)
-            self.state.skill_left[env] = self._rules_now().skill_frames
-        else:
-            low, high = plunger.speed
-            self.world.launch(env, float(rng.uniform(low, high)))
-        if self.state.save_frames[env] < 0:  # the ball save runs from the ball's first launch
-            self.state.save_frames[env] = self.book.save_frames
-        self.state.on_plunger[env] = False
-        self.state.plunger_pull[env] = 0.0
-        self._moved(env)
+        self.launch_balls([env], {env: rng})
+
+    def launch_balls(self, envs: Sequence[int], rngs: Sequence[np.random.Generator] | dict) -> None:
+        """:meth:`launch` for each of ``envs`` (env ``i`` drawing from ``rngs[i]``), the draws
+        made env by env, in the order given, and the balls put in play at once."""
+        progress, state = self._progress, self.state
+        speeds = []
+        for env in envs:
+            plunger = self.world.table_of(env).plunger
+            if progress.plunge[env]:
+                scatter = float(rngs[env].uniform(-plunger.scatter, plunger.scatter))
+                speeds.append(plunger.launch_speed(state.plunger_pull[env]) + scatter)
+            else:
+                low, high = plunger.speed
+                speeds.append(float(rngs[env].uniform(low, high)))
+        envs = np.asarray(envs, dtype=np.intp)
+        self.world.launch_balls(envs, speeds)
+        plunged = envs[progress.plunge[envs]]
+        progress.plunge[envs] = False
+        state.skill_left[plunged] = self._rules_now().skill_frames
+        first = envs[state.save_frames[envs] < 0]  # the ball save runs from the first launch
+        state.save_frames[first] = self.book.save_frames
+        state.on_plunger[envs] = False
+        state.plunger_pull[envs] = 0.0
+        self._moved(envs)
 
     def serve(self, env: int) -> None:
         """Put env ``env``'s ball on the player's plunger, at rest, to wait for the player."""
@@ -329,10 +340,11 @@ class Game:
         """(n_envs,) bool: a ball is in play (moving, or waiting on the player's plunger)."""
         return self.world.state.active | self.state.on_plunger
 
-    def _moved(self, env: int) -> None:
-        """Restart env ``env``'s ball-search clock where its ball is now."""
-        self.state.anchor[env] = self.world.balls[env, [BALL_X, BALL_Y]]
-        self.state.still_frames[env] = 0
+    def _moved(self, envs: int | np.ndarray) -> None:
+        """Restart the ball-search clock of env ``envs`` (or of each of them) where its ball is
+        now."""
+        self.state.anchor[envs] = self.world.balls[envs][..., [BALL_X, BALL_Y]]
+        self.state.still_frames[envs] = 0
 
     def buttons(self, actions: Any) -> np.ndarray:
         """The (n_envs, buttons) bool buttons (:attr:`button_names`) held by ``actions``:
@@ -406,8 +418,8 @@ class Game:
                 raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
             # Launches first: the player's plunge hands back before its frame's physics.
             launches = np.flatnonzero(progress.launch)
-            for env in launches:
-                self.launch(env, rngs[env])
+            if len(launches):
+                self.launch_balls(launches, rngs)
             progress.launch[:] = False
             # (Not swept) the backend's frame is due.
             physics = (progress.stage == PHYSICS) & (not swept)

@@ -9,7 +9,7 @@ its own (generated layouts): the World then steps every env on its own table in 
 """
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -163,10 +163,26 @@ class World:
 
     def launch(self, env: int, speed: float) -> None:
         """Put env ``env``'s ball on the plunger and fire it up the shooter lane at ``speed``."""
-        table = self.table_of(env)
-        if table.plunger is None:
-            raise ValueError(f"table {table.name!r} has no plunger")
-        self.place_ball(env, table.plunger.position, (0.0, speed))
+        self.launch_balls([env], [speed])
+
+    def launch_balls(self, envs: Sequence[int], speeds: Sequence[float]) -> None:
+        """:meth:`launch` for each of ``envs`` at its entry of ``speeds`` [m/s], at once."""
+        positions = []
+        for env in envs:
+            table = self.table_of(env)
+            if table.plunger is None:
+                raise ValueError(f"table {table.name!r} has no plunger")
+            positions.append(table.plunger.position)
+        speeds = np.asarray(speeds, dtype=np.float64)
+        if not np.isfinite(speeds).all() or (np.abs(speeds) > MAX_PLACE_SPEED).any():
+            raise ValueError(f"launch speeds must be finite and at most {MAX_PLACE_SPEED:g} m/s, "
+                             f"got {speeds.tolist()}")  # fmt: skip
+        balls = self.state.balls
+        balls[envs] = 0.0
+        balls[envs, BALL_X] = [x for x, _ in positions]
+        balls[envs, BALL_Y] = [y for _, y in positions]
+        balls[envs, BALL_VY] = speeds
+        self.state.active[envs] = True
 
     def rest_flippers(self, env: int) -> None:
         """Put env ``env``'s flippers at rest against their lower stops, released."""
