@@ -399,7 +399,10 @@ class Game:
         cabinet = buttons[:, len(BUTTONS) :] if self.cabinet else self._no_cabinet_buttons
         progress = self._progress
         playing = self._everyone if frozen is None else ~frozen
-        progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
+        if frozen is None:
+            progress.stage[:] = NEW_STEP
+        else:
+            progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
         rules = self._rules_now()
         geometries, settings = self.world.tables.kernel_arrays()
         # With on_frame the loop hands each frame's physics to Python (the same kernel), and the
@@ -422,14 +425,18 @@ class Game:
                 self.launch_balls(launches, rngs)
             progress.launch[:] = False
             # (Not swept) the backend's frame is due.
-            physics = (progress.stage == PHYSICS) & (not swept)
-            if physics.any():
+            physics = None if swept else progress.stage == PHYSICS
+            if physics is not None and physics.any():
                 self.world.step(None, physics)
                 progress.stage[physics] = AFTER_PHYSICS
                 if self.on_frame is not None:
                     self.on_frame()
-            if not physics.any() and len(launches) == 0:
+            elif len(launches) == 0:
                 break
+        if frozen is None:
+            self.state.points[:] = progress.points
+            self.state.drained[:] = progress.drained
+            return progress.reward.copy(), self.state.balls_left == 0
         self.state.points[playing] = progress.points[playing]
         self.state.drained[playing] = progress.drained[playing]
         return np.where(playing, progress.reward, 0.0), self.state.balls_left == 0
