@@ -99,6 +99,12 @@ def swing_bob(cabinet, constants, ax, ay, h):
     cabinet[BOB_VY] += (-stiffness * cabinet[BOB_Y] - damping * cabinet[BOB_VY] - ay / length) * h
     cabinet[BOB_X] += cabinet[BOB_VX] * h
     cabinet[BOB_Y] += cabinet[BOB_VY] * h
+    # Well inside the clear angle (as the squares tell, with a margin for rounding), the bob
+    # is off the ring: no need of hypot's exact angle, which is slow.
+    clear = RING_CLEAR * ring * (1.0 - 1e-9)
+    if cabinet[BOB_X] * cabinet[BOB_X] + cabinet[BOB_Y] * cabinet[BOB_Y] < clear * clear:
+        cabinet[BOB_ON_RING] = 0.0
+        return
     angle = math.hypot(cabinet[BOB_X], cabinet[BOB_Y])
     if angle >= ring:
         # The ring stops the bob at its angle: back onto it, the outward swing reflected.
