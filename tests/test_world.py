@@ -455,6 +455,18 @@ def test_the_candidate_sets_find_bitwise_the_contacts_of_sweeping_everything(tab
     assert thrown[0] == thrown[1]
 
 
+@pytest.mark.slow  # minutes without the JIT
+def test_candidate_sets_keep_the_cuts_of_turning_flippers():
+    """A turning flipper's sweep runs out of slices (a cut) for a fast enough ball wherever its
+    path is, more readily with a thin skin: sets must not drop those sweeps."""
+    data = yaml.safe_load((builtin_tables_dir() / "classic.yaml").read_text())
+    data["simulation"].update(skin=1e-8, substeps=1)
+    for flipper in data["flippers"]:
+        flipper.update(stroke_time=0.005, return_time=0.005)
+    runs = traces(table_from_dict(data), 60, throw_anywhere)
+    assert runs[0] == runs[1]
+
+
 def throw_anywhere(world: World, env: int, rng: np.random.Generator) -> None:
     """Env ``env``'s ball at a random place of the playfield, at up to 20 m/s in any
     direction (some start inside walls: the kernel pushes them out)."""

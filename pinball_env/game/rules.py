@@ -320,7 +320,8 @@ class Game:
         self.world.launch_balls(envs, speeds)
         plunged = envs[progress.plunge[envs]]
         progress.plunge[envs] = False
-        state.skill_left[plunged] = self._rules_now().skill_frames
+        if len(plunged):
+            state.skill_left[plunged] = self._rules_now().skill_frames
         first = envs[state.save_frames[envs] < 0]  # the ball save runs from the first launch
         state.save_frames[first] = self.book.save_frames
         state.on_plunger[envs] = False

@@ -110,7 +110,7 @@ class Scratch(NamedTuple):
     hit_elements: np.ndarray  # (N, max_passes) int64: hits of one substep, committed at its end
     cabinet_dv: np.ndarray  # (N, substeps, 2) float64: the cabinet's velocity change per substep
     # The candidate set of each ball (see ``physics.near``): the elements it can reach soon.
-    near: np.ndarray  # (N, M) int64: solids' ids, then flippers', drop targets', sensors' indexes
+    near: np.ndarray  # (N, M) int64: walls' and posts' ids; flippers', targets', sensors' indexes
     near_ends: np.ndarray  # (N, 4) int64: where each of those groups ends in the row of near
     near_zone: np.ndarray  # (N, 3) float64: the zone's centre and radius [m] (radius < 0: none)
 

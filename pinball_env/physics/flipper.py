@@ -134,11 +134,13 @@ def sweep_flipper(cx, cy, vx, vy, duration, r, px, py, length, rb, rt, angle0, o
     clear = flipper_reach(length, rb, rt) + r + 2.0 * tol
     if dist - speed * duration > clear:
         return INF, 0.0, 0.0, 0.0, 0.0
-    # A path that passes the pivot farther than that (and a rounding margin) misses the
-    # flipper at any angle: the slices' chords lie within tol of it.
-    gx, gy = segment_offset(px, py, cx, cy, cx + vx * duration, cy + vy * duration)
-    if gx * gx + gy * gy > (clear + 1e-9) * (clear + 1e-9):
-        return INF, 0.0, 0.0, 0.0, 0.0
+    # A path that passes the pivot farther than that (and a rounding margin) misses a resting
+    # flipper at any angle. (Not a turning one: its slices could run out, a cut, wherever the
+    # path is.)
+    if omega == 0.0 or t_stop <= 0.0:
+        gx, gy = segment_offset(px, py, cx, cy, cx + vx * duration, cy + vy * duration)
+        if gx * gx + gy * gy > (clear + 1e-9) * (clear + 1e-9):
+            return INF, 0.0, 0.0, 0.0, 0.0
     rho = dist + speed * duration
     tau_a = 0.0
     for _ in range(MAX_FLIPPER_SLICES):

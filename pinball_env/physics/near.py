@@ -1,15 +1,17 @@
 """The broad phase: each ball's candidate set, the elements it can reach soon.
 
-A ball's set is gathered around a point, its *zone*'s centre: every solid element, flipper,
-drop target and sensor whose surface lies within the zone's radius of it (flippers at any
-angle, drop targets standing or not). Before each sweep the kernel checks that the ball's path
-(a segment of its centre) lies in the zone shrunk by the ball's radius and NEAR_MARGIN
-(:func:`path_in_zone`); then an element outside the set is farther from every point of the path
-than the ball's radius and the margin, where no sweep finds a contact nor a sensor a crossing.
-So only the set is swept, in id order as before, and the contacts are bitwise those of sweeping
-everything. A path that leaves the zone (a ball sped up by a kick or a flipper, a ball placed
-elsewhere, a frame later) gathers a new set where the ball is, reaching as far as the ball
-goes in NEAR_TIME at its speed under gravity, and one ball radius more.
+A ball's set is gathered around a point, its *zone*'s centre: every wall, post, flipper (at
+any angle), drop target (standing or not) and sensor whose surface lies within the zone's
+radius of it. Before each sweep the kernel checks that the ball's path (a segment of its
+centre) lies in the zone shrunk by the ball's radius and a margin (:func:`path_in_zone`); then
+an element outside the set is farther from every point of the path than the ball's radius and
+the margin, where no sweep finds a contact nor a sensor a crossing. So only the set is swept,
+in id order as before, and the contacts are bitwise those of sweeping everything. (A turning
+flipper is swept whether in the set or not: its sweep can end in a cut wherever the path is,
+see ``flipper.sweep_flipper``.) A path that leaves the zone (a ball sped up by a kick or a
+flipper, a ball placed elsewhere, a frame later) gathers a new set where the ball is, reaching
+as far as the ball goes in NEAR_TIME at its speed under gravity (or along its whole path, if
+longer), and one ball radius more.
 
 The set lives in the env's rows of ``Scratch`` (``near``, ``near_ends``, ``near_zone``) and
 carries over from frame to frame; ``World`` clears the zone when an env's table changes. A zone
@@ -58,7 +60,7 @@ def near_reach(vx, vy, duration, r, gravity, skin):
 def path_in_zone(x, y, dx, dy, zone, r, skin):
     """Whether the ball's centre path from (x, y) by (dx, dy) lies within the zone's radius,
     less the ball's radius ``r`` and the margin, of its centre (a disc holds a segment when it
-    holds both ends). False for a non-finite path, unless the zone is infinite."""
+    holds both ends). False for a NaN path; an infinite zone holds any other."""
     limit = zone[2] - r - NEAR_SKINS * skin - NEAR_ROUNDING
     ax = x - zone[0]
     ay = y - zone[1]
@@ -80,9 +82,10 @@ def near_segment(x, y, segment, reach):
 def gather_near(x, y, reach, geometry, near, ends, zone):
     """Gather the set of a zone of radius ``reach`` around (x, y) into ``near`` and ``ends``
     (an env's rows of ``Scratch.near`` and ``Scratch.near_ends``) and record the zone in
-    ``zone``: solids by element id, then flippers, drop targets and sensors by their index.
-    A non-finite point or an infinite reach takes every element."""
-    every = not math.isfinite(x + y) or reach == math.inf
+    ``zone``: walls and posts by element id, then flippers, drop targets and sensors by their
+    index.
+    A non-finite point or reach (or an infinite one) takes every element."""
+    every = not math.isfinite(x + y) or not reach < math.inf  # (NaN too)
     count = 0
     segments = geometry.segments
     for j in range(segments.shape[0]):

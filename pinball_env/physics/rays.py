@@ -32,8 +32,6 @@ from pinball_env.physics.sweep import norm, segment_offset
 RAY_RANGE = 0.5
 
 
-# Kinds of the elements a ray meets (see cast_rays).
-_SEGMENT, _CIRCLE, _FLIPPER = 0, 1, 2
 # Rounding margin of the distance bounds by which cast_rays skips elements [relative].
 _MARGIN = 1e-9
 
@@ -66,7 +64,7 @@ def cast_rays(x, y, directions, geometry, flipper_angles, out, bounds, order, si
             f = flippers[e - n_segments - n_circles]
             reach = flipper_reach(f[FLIPPER_LENGTH], f[FLIPPER_BASE_RADIUS], f[FLIPPER_TIP_RADIUS])
             bound = norm(x - f[FLIPPER_PIVOT_X], y - f[FLIPPER_PIVOT_Y]) - reach
-        if bound <= limit:  # (a non-finite point keeps every element)
+        if bound <= limit:  # (a NaN point keeps every element, below)
             bound = bound * (1.0 - _MARGIN) - 1e-12
             i = n  # insertion sort, nearest first
             while i > 0 and bounds[i - 1] > bound:

@@ -348,7 +348,8 @@ def earliest_flipper_contact(
     x, y, vx, vy, duration, r, flippers, angles, omegas, stops, tol, near, first, last
 ):  # fmt: skip
     """Earliest contact of a ball moving at (vx, vy) for ``duration`` seconds with a flipper
-    of a candidate set: those whose indexes are ``near[first:last]``, in increasing order.
+    of a candidate set (those whose indexes are ``near[first:last]``, in increasing order) or
+    turning (a turning flipper's sweep can end in a cut wherever the path is).
 
     ``angles``, ``omegas`` and ``stops`` give each flipper's angle now, its angular velocity and
     when it reaches its stop. Returns ``(tau, nx, ny, svx, svy, flipper)`` with ``tau`` in
@@ -360,8 +361,13 @@ def earliest_flipper_contact(
     best_svx = 0.0
     best_svy = 0.0
     best = -1
-    for k in range(first, last):
-        j = near[k]
+    k = first
+    for j in range(flippers.shape[0]):
+        listed = k < last and near[k] == j
+        if listed:
+            k += 1
+        elif omegas[j] == 0.0 or stops[j] <= 0.0:
+            continue
         f = flippers[j]
         tau, nx, ny, svx, svy = sweep_flipper(
             x, y, vx, vy, duration, r,
@@ -687,7 +693,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 )  # fmt: skip
                 svx = svy = 0.0
                 cut = False
-                if near_ends[NEAR_FLIPPERS] > near_ends[NEAR_SOLIDS]:
+                if n_flippers > 0:
                     tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
                         x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops, tol,
                         near, near_ends[NEAR_SOLIDS], near_ends[NEAR_FLIPPERS],

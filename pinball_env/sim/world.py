@@ -167,6 +167,7 @@ class World:
 
     def launch_balls(self, envs: Sequence[int], speeds: Sequence[float]) -> None:
         """:meth:`launch` for each of ``envs`` at its entry of ``speeds`` [m/s], at once."""
+        envs = np.asarray(envs, dtype=np.intp)
         positions = []
         for env in envs:
             table = self.table_of(env)

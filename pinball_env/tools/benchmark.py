@@ -17,7 +17,9 @@ Measures, with uniformly random actions on the classic table (state observations
   generated table (16 layouts, generated before the timing), with 16 rays in the observation;
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
   references of this machine;
-- the kernel alone: microseconds per ball-frame and nanoseconds per ball-element sweep test;
+- the kernel alone: microseconds per ball-frame, and nanoseconds per ball-element pair that a
+  pass would sweep if it tested every solid element (as the kernel did before its candidate
+  sets: the figure compares across versions);
 - table generation (``tablegen_ms_per_table``, ``tablegen_targets_ms_per_table``): milliseconds
   per generated table, drawn, validated and checked for playability (``generate_table`` called
   directly, no cache), the mean over 8 (``--quick``) or 32 seeds, without and with targets;
@@ -134,7 +136,7 @@ def measure_kernel(table: str, n_envs: int, frames: int, max_speed: float, seed:
     random_launches(world, rng, max_speed)
     world.step()  # compile (or load the cached kernel) outside the timing
     random_launches(world, rng, max_speed)
-    elements = first_sensor(world.geometry)  # the solid ones, that every pass sweeps against
+    elements = first_sensor(world.geometry)  # the solid ones (a pass sweeps its set of them)
     substeps = world.table.simulation.substeps
     contacts = ball_frames = 0  # frames of balls in play: a drained ball costs (almost) nothing
     start = time.perf_counter()
