@@ -261,24 +261,32 @@ def min_gap(x, y, polygon):
     return min(gaps)
 
 
+# A ball thrown in a closed room: where (fractions of the room's start box), how fast, and
+# the simulation's settings.
+ROOM_THROWS = {
+    "room": st.sampled_from(sorted(ROOMS)),
+    "fx": st.floats(0.0, 1.0),
+    "fy": st.floats(0.0, 1.0),
+    "speed": st.floats(0.0, 1000.0),
+    "heading": st.floats(0.0, 2 * math.pi),
+    "substeps": st.integers(1, 12),
+    "frame_rate": st.floats(20.0, 480.0),
+    "restitution": st.floats(0.0, 1.0),
+}
+
+
+def room_start(room: str, fx: float, fy: float) -> tuple[float, float]:
+    """The point at fractions (fx, fy) of ``room``'s start box."""
+    (x_lo, y_lo), (x_hi, y_hi) = ROOM_STARTS[room]
+    return x_lo + fx * (x_hi - x_lo), y_lo + fy * (y_hi - y_lo)
+
+
 @settings(max_examples=60, deadline=None)
-@given(
-    room=st.sampled_from(sorted(ROOMS)),
-    fx=st.floats(0.0, 1.0),
-    fy=st.floats(0.0, 1.0),
-    speed=st.floats(0.0, 1000.0),
-    heading=st.floats(0.0, 2 * math.pi),
-    substeps=st.integers(1, 12),
-    frame_rate=st.floats(20.0, 480.0),
-    restitution=st.floats(0.0, 1.0),
-    friction=st.floats(0.0, 1.0),
-)
+@given(**ROOM_THROWS, friction=st.floats(0.0, 1.0))
 def test_ball_never_leaves_a_closed_room(
     room, fx, fy, speed, heading, substeps, frame_rate, restitution, friction
 ):
-    polygon = ROOMS[room]
-    (x_lo, y_lo), (x_hi, y_hi) = ROOM_STARTS[room]
-    x, y = x_lo + fx * (x_hi - x_lo), y_lo + fy * (y_hi - y_lo)
+    polygon, (x, y) = ROOMS[room], room_start(room, fx, fy)
     if not inside_polygon(x, y, polygon) or min_gap(x, y, polygon) < RADIUS * 1.01:
         return
     world = make_world(
@@ -295,25 +303,14 @@ def test_ball_never_leaves_a_closed_room(
 
 
 @settings(max_examples=40, deadline=None)
-@given(
-    room=st.sampled_from(sorted(ROOMS)),
-    fx=st.floats(0.0, 1.0),
-    fy=st.floats(0.0, 1.0),
-    speed=st.floats(0.0, 1000.0),
-    heading=st.floats(0.0, 2 * math.pi),
-    substeps=st.integers(1, 12),
-    frame_rate=st.floats(20.0, 480.0),
-    restitution=st.floats(0.0, 1.0),
-)
+@given(**ROOM_THROWS)
 # Substeps longer than physics.near.NEAR_TIME: a new zone must hold the whole path.
 @example(room="box", fx=0.5, fy=0.9, speed=3.0, heading=4.0, substeps=1, frame_rate=20.0,
          restitution=1.0)  # fmt: skip
 def test_candidate_sets_sweep_bitwise_as_everything_in_any_room(
     room, fx, fy, speed, heading, substeps, frame_rate, restitution
 ):
-    polygon = ROOMS[room]
-    (x_lo, y_lo), (x_hi, y_hi) = ROOM_STARTS[room]
-    x, y = x_lo + fx * (x_hi - x_lo), y_lo + fy * (y_hi - y_lo)
+    polygon, (x, y) = ROOMS[room], room_start(room, fx, fy)
     if not inside_polygon(x, y, polygon) or min_gap(x, y, polygon) < RADIUS * 1.01:
         return
     runs = []

@@ -72,10 +72,17 @@ def path_in_zone(x, y, dx, dy, zone, r, skin):
 
 
 @njit(cache=True, inline="always")
-def near_segment(x, y, segment, reach):
-    """Whether segment (x0, y0, x1, y1) passes within ``reach`` of (x, y)."""
-    gx, gy = segment_offset(x, y, segment[0], segment[1], segment[2], segment[3])
-    return gx * gx + gy * gy <= reach * reach
+def gather_segments(x, y, reach, every, segments, near, count):
+    """Append to ``near`` (from ``count`` on) the index of each of ``segments`` ((n, 4): x0,
+    y0, x1, y1) that passes within ``reach`` of (x, y) (each, with ``every``); returns the new
+    count."""
+    for j in range(segments.shape[0]):
+        s = segments[j]
+        gx, gy = segment_offset(x, y, s[0], s[1], s[2], s[3])
+        if every or gx * gx + gy * gy <= reach * reach:
+            near[count] = j
+            count += 1
+    return count
 
 
 @njit(cache=True)
@@ -86,12 +93,8 @@ def gather_near(x, y, reach, geometry, near, ends, zone):
     index.
     A non-finite point or reach (or an infinite one) takes every element."""
     every = not math.isfinite(x + y) or not reach < math.inf  # (NaN too)
-    count = 0
     segments = geometry.segments
-    for j in range(segments.shape[0]):
-        if every or near_segment(x, y, segments[j], reach):
-            near[count] = j
-            count += 1
+    count = gather_segments(x, y, reach, every, segments, near, 0)
     circles = geometry.circles
     for j in range(circles.shape[0]):
         c = circles[j]
@@ -107,17 +110,9 @@ def gather_near(x, y, reach, geometry, near, ends, zone):
             near[count] = j
             count += 1
     ends[NEAR_FLIPPERS] = count
-    targets = geometry.drop_targets
-    for j in range(targets.shape[0]):
-        if every or near_segment(x, y, targets[j], reach):
-            near[count] = j
-            count += 1
+    count = gather_segments(x, y, reach, every, geometry.drop_targets, near, count)
     ends[NEAR_DROP_TARGETS] = count
-    sensors = geometry.sensors
-    for j in range(sensors.shape[0]):
-        if every or near_segment(x, y, sensors[j], reach):
-            near[count] = j
-            count += 1
+    count = gather_segments(x, y, reach, every, geometry.sensors, near, count)
     ends[NEAR_SENSORS] = count
     zone[0] = x
     zone[1] = y
