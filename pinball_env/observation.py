@@ -118,7 +118,7 @@ class StateObserver:
             obs = np.concatenate([obs, self.rule_observation()], axis=1)
         if self.rays:
             args = (state.balls, tables.geometries(), state.flipper_angle, self.rays,
-                    self._ray_distances)  # fmt: skip
+                    state.hits.shape[1], self._ray_distances)  # fmt: skip
             world.threads.run(cast_all_rays, world.n_envs, *args)
             obs = np.concatenate([obs, self._ray_distances], axis=1)
         return obs

@@ -156,12 +156,10 @@ def ray_directions(n_rays):
 
 
 @njit(cache=True, nogil=True)
-def cast_all_rays(balls, geometries, angles, n_rays, out, start, stop):
-    """:func:`cast_rays` for envs ``start`` to ``stop``, env i on ``geometries[i]``."""
-    size = 0
-    for env in range(start, stop):
-        g = geometries[env]
-        size = max(size, g.segments.shape[0] + g.circles.shape[0] + g.flippers.shape[0])
+def cast_all_rays(balls, geometries, angles, n_rays, size, out, start, stop):
+    """:func:`cast_rays` for envs ``start`` to ``stop``, env i on ``geometries[i]``; ``size``:
+    at least the walls, posts and flippers of any of them (the width of ``State.hits`` will
+    do)."""
     bounds, order = np.empty(size), np.empty(size, dtype=np.int64)
     directions, sides = ray_directions(n_rays), np.empty((angles.shape[1], 2))
     for env in range(start, stop):
