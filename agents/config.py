@@ -92,6 +92,11 @@ class TrainConfig(_RunConfig):
     """Wall-clock limit of a training session [min] (0: none): learning stops at the first env
     step past it (the unfinished rollout is not learned from), however few of
     ``total_timesteps`` are done, and the model is saved."""
+    total_frames: int = 0
+    """A budget in frames (0: none), summed over the envs, the warm start's games included:
+    learning stops at the first env step at or past it, as at ``max_minutes``. The benchmark
+    protocol's budget (``pinball_env.protocol.TRAINING_FRAMES``): frames, not steps, so that
+    frame skips and ``skip_above`` cost what they play."""
     seed: int = 0
     """Seed of the algorithm and of the training games (env i starts from seed + i)."""
     device: str = "cpu"
@@ -289,6 +294,8 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
     minutes = config.max_minutes
     if isinstance(minutes, bool) or not isinstance(minutes, (int, float)) or not 0 <= minutes < 1e6:
         fail("max_minutes", f"must be a number of minutes >= 0, got {minutes!r}")
+    if isinstance(config, TrainConfig):
+        integer("total_frames", config.total_frames, 0)
     integer("torch_threads", config.torch_threads, 1)
     integer("env_threads", config.env_threads, 1)
     integer("checkpoint_every", config.checkpoint_every, 0)

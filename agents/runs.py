@@ -5,7 +5,7 @@ and the progress bar of a training.
 A run folder::
 
     config.yaml           the exact config (CONFIG_FILE)
-    meta.json             versions, the command, the start time, the resumes
+    meta.json             versions, the commit, the command, the start time, the resumes
     progress.csv          the logged rows (progress_K.csv: before the K-th resume of an SB3 run)
     validation.csv        the validation games' results (VALIDATION_FILE), best_model.zip
     checkpoints/step_N.zip, step_N_vecnormalize.pkl   (SB3), or step_N/ (RLlib folders)
@@ -157,6 +157,7 @@ def start_run(config: AnyConfig, runs: Path, command: list[str], libraries: list
     }
     meta = {
         **versions,
+        "commit": source_commit(),
         "python": platform.python_version(),
         "command": command,
         "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
@@ -165,10 +166,26 @@ def start_run(config: AnyConfig, runs: Path, command: list[str], libraries: list
     return run
 
 
+def source_commit() -> str | None:
+    """The git commit of the checkout this code runs from (a ``+`` marks uncommitted changes),
+    or None outside a checkout."""
+    import subprocess
+
+    root = Path(__file__).resolve().parent.parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
+                                text=True, check=True).stdout.strip()  # fmt: skip
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=root, capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return commit + ("+" if dirty.strip() else "")
+
+
 # What ``--resume RUN key=value`` may change: how long and how often, not what is learned.
 RESUME_KEYS = {
-    TrainConfig: ("total_timesteps", "max_minutes", "checkpoint_every", "validate_every",
-                  "validate_episodes", "validate_seed"),
+    TrainConfig: ("total_timesteps", "max_minutes", "total_frames", "checkpoint_every",
+                  "validate_every", "validate_episodes", "validate_seed"),
     RllibConfig: ("total_timesteps", "max_minutes", "checkpoint_every"),
 }  # fmt: skip
 

@@ -12,7 +12,7 @@ its last checkpoint with the same config; ``--resume RUN key=value ...`` extends
 (``total_timesteps``, ``max_minutes``, ``checkpoint_every`` and the validation keys: the
 others would change what was learned and are refused). Training stops at ``total_timesteps``
 or after ``max_minutes`` of wall time (the progress bar's remaining time counts to whichever
-comes first). SIGINT (Ctrl-C) or SIGTERM, warm start included, saves a checkpoint with the
+comes first), or at ``total_frames`` frames played (the benchmark protocol's budget). SIGINT (Ctrl-C) or SIGTERM, warm start included, saves a checkpoint with the
 normalisation statistics and prints it and the resume command. With ``validate_every``, the
 model plays the validation games (``validate_seed`` on) every that many steps and at the end;
 the scores go to ``validation.csv``, the best model so far to ``best_model.zip``, and the best
@@ -170,6 +170,8 @@ def make_callback(
                 self.logger.record("validation/score_mean", row["score_mean"])
                 self.next_validation += config.validate_every
             self.bar.update(self.num_timesteps)
+            if config.total_frames and self.counter.frames >= config.total_frames:
+                return False
             return not stop and (not config.max_minutes or time.monotonic() < self.deadline)
 
         def _on_rollout_end(self) -> None:
