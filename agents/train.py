@@ -10,9 +10,10 @@ exact config (``config.yaml``), ``meta.json`` (package versions, command), Tenso
 ``model_vecnormalize.pkl`` when the config normalises). ``--resume RUN`` continues a run from
 its last checkpoint with the same config; ``--resume RUN key=value ...`` extends it first
 (``total_timesteps``, ``max_minutes``, ``checkpoint_every`` and the validation keys: the
-others would change what was learned and are refused). Training stops at ``total_timesteps``
-or after ``max_minutes`` of wall time (the progress bar's remaining time counts to whichever
-comes first), or at ``total_frames`` frames played (the benchmark protocol's budget). SIGINT (Ctrl-C) or SIGTERM, warm start included, saves a checkpoint with the
+others would change what was learned and are refused). Training stops at ``total_timesteps``,
+after ``max_minutes`` of wall time (the progress bar's remaining time counts to whichever comes
+first) or at ``total_frames`` frames played (the benchmark protocol's budget). SIGINT (Ctrl-C)
+or SIGTERM, warm start included, saves a checkpoint with the
 normalisation statistics and prints it and the resume command. With ``validate_every``, the
 model plays the validation games (``validate_seed`` on) every that many steps and at the end;
 the scores go to ``validation.csv``, the best model so far to ``best_model.zip``, and the best
