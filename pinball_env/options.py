@@ -149,6 +149,10 @@ class PinballOptions(_Checked):
     """Frames per step (1-60), the action held on each."""
     skip_above: float = _option(0.0, checks.fraction)
     """0 (off), or a height in table heights (0-1) above which a step runs on, buttons released."""
+    repeat_action_probability: float = _option(0.0, checks.fraction)
+    """Sticky actions (ALE v5's, Machado et al. 2018): each frame, with this probability (drawn
+    from the env's own random stream), the buttons of the frame before are pressed instead of
+    the action's (0: off; 0.25 in the benchmark protocol, for evaluation)."""
     max_frames: int | None = _option(None, lambda name, v: checks.optional_integer(name, v, 1))
     """None, or the frames a game lasts before it is truncated (a time limit in frames)."""
     image_size: int | tuple[int, int] = _option((84, 84), _image_size)

@@ -30,6 +30,8 @@ def test_defaults_are_the_registered_games():
         ({"num_layouts": 4}, "num_layouts: options of generated tables"),
         ({"table": "generated", "physics": "pymunk"}, "plays one fixed table"),
         ({"rays": 4, "obs_type": "rgb"}, "rays are part of the state observation"),
+        ({"repeat_action_probability": 1.0}, r"repeat_action_probability must be a number in \["),
+        ({"repeat_action_probability": float("nan")}, "repeat_action_probability must be"),
     ],
 )
 def test_bad_options_are_clear_errors_before_anything_is_built(kwargs, message):

@@ -31,6 +31,14 @@ def random_actions(space: gym.Space, steps: int, seed: int) -> list:
             "max_frames": 1500,
             "max_episode_steps": None,
         },
+        {
+            "frame_skip": 2,
+            "skip_above": 0.3,
+            "repeat_action_probability": 0.25,
+            "balls": 1,
+            "max_frames": 1500,
+            "max_episode_steps": None,
+        },
     ],
 )
 def test_vector_env_is_bitwise_n_single_envs(kwargs):

@@ -236,8 +236,8 @@ class PinballEnv(CoreAttributes, gym.Env):
     ```python
     gym.make("Pinball-v0", table="classic", obs_type="state", action_type="discrete", balls=3,
              reward_scale=0.01, height_shaping=0.0, drain_penalty=0.0, bonus_shaping=0.0,
-             frame_skip=1,
-             skip_above=0.0, max_frames=None, image_size=(84, 84), physics="swept",
+             frame_skip=1, skip_above=0.0, repeat_action_probability=0.0, max_frames=None,
+             image_size=(84, 84), physics="swept",
              render_mode=None, num_layouts=0, start_layout=0, difficulty="easy", targets=False,
              rays=0)
     gym.make("PinballProcgen-v0", num_layouts=16, ...)  # table="generated", the rest the same
@@ -271,6 +271,13 @@ class PinballEnv(CoreAttributes, gym.Env):
       step's frames, while the ball is in play above that height, the buttons are released and
       the step runs on (up to 60 more frames), so that the agent is asked only while the ball
       is low, near the flippers.
+    - ``repeat_action_probability``: sticky actions, as ALE v5's (Machado et al. 2018), in
+      [0, 1): each frame, with this probability, the buttons the frame before pressed are
+      pressed again instead of the action's (the frames of ``frame_skip`` and ``skip_above``
+      each draw). The draws come from the env's own random stream (``np_random``), one per
+      frame the step may play, drawn when the step starts; 0 (the default) draws nothing, so
+      games are as they were. The benchmark protocol evaluates with 0.25
+      (``pinball_env.protocol``).
     - ``max_frames``: None, or the frames a game lasts: the step that reaches it stops there
       and returns ``truncated`` (a time limit in frames, whatever the frame skip; the
       ``TimeLimit`` wrapper's ``max_episode_steps`` counts steps).

@@ -55,8 +55,9 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
     gym.make_vec("Pinball-v0", num_envs=1024, table="classic", obs_type="state",
                  action_type="discrete", balls=3, reward_scale=0.01, height_shaping=0.0,
                  drain_penalty=0.0, bonus_shaping=0.0, frame_skip=1, skip_above=0.0,
-                 max_frames=None, image_size=(84, 84), physics="swept", render_mode=None,
-                 max_episode_steps=7200, num_threads=None, autoreset_mode="NextStep")
+                 repeat_action_probability=0.0, max_frames=None, image_size=(84, 84),
+                 physics="swept", render_mode=None, max_episode_steps=7200, num_threads=None,
+                 autoreset_mode="NextStep")
     ```
 
     Every argument of ``PinballEnv`` (``PinballOptions``; and its ``metadata["render_fps"]``,

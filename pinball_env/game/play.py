@@ -38,6 +38,7 @@ class Rules(NamedTuple):
     skip_heights: np.ndarray  # (N,) float64: skip_above in metres
     frame_skip: int
     skip_frames: int  # most frames run on while the ball is high (0: skip_above is off)
+    repeat_probability: float  # sticky actions: a frame repeats the last one's buttons (0: off)
     max_frames: int  # frames a game lasts (-1: no limit)
     search_frames: int  # still frames before a ball search
     radius: float  # the ball's [m]
@@ -85,6 +86,9 @@ class StepProgress(NamedTuple):
     finite: np.ndarray  # (N,) bool: the ball state stayed finite
     skill_shot: np.ndarray  # (N,) bool: the skill shot was made in the step
     tilt: np.ndarray  # (N,) bool: the machine tilted in the step
+    # (N, frame_skip + skip_frames) float64: the step's draws of the sticky actions, uniform in
+    # [0, 1) from each env's stream, one per frame (no columns without sticky actions)
+    repeat_draws: np.ndarray
 
 
 # A step's stages, per env: its start, then per frame: the next frame chosen (or the step
@@ -133,9 +137,10 @@ def play_step(
     env's step (``progress.finite``).
 
     A frame: the flipper commands (the action's for the first ``frame_skip`` frames, then
-    released while the ball is above ``skip_heights``), the physics, the points scored, a
-    drained ball (the next one is launched), the ball search (BALL_SEARCH_TIME), the frame's
-    reward. Envs are independent: threads may share the range.
+    released while the ball is above ``skip_heights``; with sticky actions, the last frame's
+    buttons again where the frame's draw is below ``rules.repeat_probability``), the physics,
+    the points scored, a drained ball (the next one is launched), the ball search
+    (BALL_SEARCH_TIME), the frame's reward. Envs are independent: threads may share the range.
 
     With the cabinet (``rules.cabinet``; ``cabinet_buttons`` (N, 4): plunger, nudge left,
     right, up) a frame also pulls the plunger while its button is held and fires a ball
@@ -199,11 +204,41 @@ def play_step(
                 ):
                     stage[env] = STEP_DONE
                     continue
-                for j in range(flipper_command.shape[1]):
-                    flipper_command[env, j] = held and commands[env, j] and not tilted[env]
+                n_flippers = flipper_command.shape[1]
+                # Sticky actions (ALE's): the frame presses what the last one pressed, where
+                # its draw says so; state.pressed keeps the buttons each frame pressed.
+                sticky = rules.repeat_probability > 0.0
+                if sticky and not progress.repeat_draws[env, k] < rules.repeat_probability:
+                    for j in range(n_flippers):
+                        state.pressed[env, j] = held and commands[env, j]
+                    for j in range(cabinet_buttons.shape[1]):
+                        state.pressed[env, n_flippers + j] = held and cabinet_buttons[env, j]
+                for j in range(n_flippers):
+                    pressed = state.pressed[env, j] if sticky else held and commands[env, j]
+                    flipper_command[env, j] = pressed and not tilted[env]
                 if rules.cabinet:
+                    plunger = (
+                        state.pressed[env, n_flippers]
+                        if sticky
+                        else (held and cabinet_buttons[env, 0])
+                    )
+                    left = (
+                        state.pressed[env, n_flippers + 1]
+                        if sticky
+                        else (held and cabinet_buttons[env, 1])
+                    )
+                    right = (
+                        state.pressed[env, n_flippers + 2]
+                        if sticky
+                        else (held and cabinet_buttons[env, 2])
+                    )
+                    up = (
+                        state.pressed[env, n_flippers + 3]
+                        if sticky
+                        else (held and cabinet_buttons[env, 3])
+                    )
                     # The plunger: pulled back while its button is held, fired when let go.
-                    if held and cabinet_buttons[env, 0]:
+                    if plunger:
                         pull[env] = min(pull[env] + rules.pull_step, rules.stroke)
                     elif pull[env] > 0.0:
                         if on_plunger[env]:  # Python fires it: the scatter is a random draw
@@ -213,11 +248,9 @@ def play_step(
                     # The nudge: a shove along the pressed directions, once per nudge_frames.
                     if nudge_wait[env] > 0:
                         nudge_wait[env] -= 1
-                    if held and nudge_wait[env] == 0:
-                        dx = (1.0 if cabinet_buttons[env, 2] else 0.0) - (
-                            1.0 if cabinet_buttons[env, 1] else 0.0
-                        )
-                        dy = 1.0 if cabinet_buttons[env, 3] else 0.0
+                    if nudge_wait[env] == 0:
+                        dx = (1.0 if right else 0.0) - (1.0 if left else 0.0)
+                        dy = 1.0 if up else 0.0
                         length = math.sqrt(dx * dx + dy * dy)
                         if length > 0.0:
                             cabinet[env, CABINET_SHOVE_X] = rules.nudge_impulse * dx / length
@@ -373,8 +406,9 @@ def cabinet_rules(
     return scored
 
 
-def new_progress(n_envs: int) -> StepProgress:
-    """A zeroed :class:`StepProgress` for ``n_envs`` envs."""
+def new_progress(n_envs: int, repeat_draws: int = 0) -> StepProgress:
+    """A zeroed :class:`StepProgress` for ``n_envs`` envs (``repeat_draws``: draws of the
+    sticky actions per step)."""
     return StepProgress(
         stage=np.zeros(n_envs, dtype=np.int64),
         frames=np.zeros(n_envs, dtype=np.int64),
@@ -390,4 +424,5 @@ def new_progress(n_envs: int) -> StepProgress:
         finite=np.ones(n_envs, dtype=bool),
         skill_shot=np.zeros(n_envs, dtype=bool),
         tilt=np.zeros(n_envs, dtype=bool),
+        repeat_draws=np.zeros((n_envs, repeat_draws)),
     )

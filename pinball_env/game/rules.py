@@ -87,6 +87,9 @@ class GameState(NamedTuple):
     rule_events: np.ndarray  # (N, R + 2) int64: rules fired in the last step (RuleSet.event_names)
     lights_were_on: np.ndarray  # (N, R) bool: a lights_on rule's lights were all lit
     flippers_before: np.ndarray  # (N, F) bool: the flipper commands of the last frame
+    # Sticky actions (repeat_action_probability): the flipper commands and cabinet buttons the
+    # last frame pressed, which the next one may press again.
+    pressed: np.ndarray  # (N, F + 4) bool
 
 
 class Game:
@@ -97,7 +100,8 @@ class Game:
         table: a validated table with a plunger, flippers, an outline and a drain.
         n_envs: games played side by side.
         options: the game's options (``PinballOptions``: balls, action_type, reward_scale,
-            height_shaping, drain_penalty, frame_skip, skip_above, max_frames, physics; the
+            height_shaping, drain_penalty, frame_skip, skip_above, repeat_action_probability,
+            max_frames, physics; the
             others are the envs'), or None for the defaults; ``**kwargs`` replace any of them.
             ``skip_above`` runs a step on, buttons released, for at most MAX_RUN_ON_FRAMES
             frames while the ball is above it; ``max_frames`` ends a game's time
@@ -166,6 +170,10 @@ class Game:
             rule_events=np.zeros((n_envs, n_rules + 2), dtype=np.int64),
             lights_were_on=np.zeros((n_envs, n_rules), dtype=bool),
             flippers_before=np.zeros((n_envs, n_flippers), dtype=bool),
+            pressed=np.zeros(
+                (n_envs, self.world.state.flipper_command.shape[1] + len(CABINET_BUTTONS)),
+                dtype=bool,
+            ),
         )
         # The buttons: the flippers', and the cabinet's on a table that has one.
         self.cabinet = table.has_cabinet
@@ -177,7 +185,10 @@ class Game:
         self._play: dict[type, Any] = {}  # play_frames's compiled entries (compiled_entry)
         # Called after each frame's physics, when set: to record the frames a step runs on.
         self.on_frame: Callable[[], None] | None = None
-        self._progress = new_progress(n_envs)
+        self.repeat_action_probability = options.repeat_action_probability
+        # One draw per frame a step may play, from each env's stream (none without sticky).
+        frames = self.frame_skip + (MAX_RUN_ON_FRAMES if self.skip_above else 0)
+        self._progress = new_progress(n_envs, frames if self.repeat_action_probability else 0)
         self.ball_search_frames = round(BALL_SEARCH_TIME * table.simulation.frame_rate)
 
     def set_table(self, env: int, table: Table) -> None:
@@ -272,6 +283,7 @@ class Game:
         state.points[env] = 0
         state.drained[env] = False
         state.frames[env] = 0
+        state.pressed[env] = False
         self.world.reset_targets(env)
         if self.book.active:
             rules = self.rule_set
@@ -404,6 +416,10 @@ class Game:
             progress.stage[:] = NEW_STEP
         else:
             progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
+        if self.repeat_action_probability:
+            draws = progress.repeat_draws
+            for env in np.flatnonzero(playing):
+                draws[env] = rngs[env].random(draws.shape[1])
         rules = self._rules_now()
         geometries, settings = self.world.tables.kernel_arrays()
         # With on_frame the loop hands each frame's physics to Python (the same kernel), and the
@@ -465,6 +481,7 @@ class Game:
             skip_heights=self.skip_above * self.world.tables.height,
             frame_skip=self.frame_skip,
             skip_frames=MAX_RUN_ON_FRAMES if self.skip_above else 0,
+            repeat_probability=self.repeat_action_probability,
             max_frames=-1 if self.max_frames is None else self.max_frames,
             search_frames=self.ball_search_frames,
             radius=self.table.ball.radius,
