@@ -27,6 +27,7 @@ import yaml
 from pinball_env.extras import missing_message
 from pinball_env.game import check_playable
 from pinball_env.options import GAME_FRAMES, PinballOptions
+from pinball_env.protocol import protocol_options
 from pinball_env.table import Table, load_any_table
 
 ALGORITHMS = ("ppo", "a2c", "dqn")
@@ -318,6 +319,17 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
         fail("eval_seed", f"{config.eval_seed} overlaps the training seeds {config.seed}.."
                           f"{config.seed + seeds - 1}")  # fmt: skip
     _check_env(config.env, fail)
+
+
+def protocol_config(config: AnyConfig) -> AnyConfig:
+    """``config`` playing the benchmark protocol's game (``pinball_env.protocol``): its env
+    options (how the agent sees and acts) on the protocol's table, balls and time, with sticky
+    actions; ConfigError if its env is not a protocol env or its options change the game."""
+    try:
+        kwargs = protocol_options(config.env.id, config.env.kwargs)
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
+    return dataclasses.replace(config, env=dataclasses.replace(config.env, kwargs=kwargs))
 
 
 def _check_integer(fail: Callable[[str, str], None], key: str, value: Any, low: int) -> None:

@@ -3,6 +3,8 @@
     python -m agents.evaluate --model RUN_OR_ZIP --episodes 100 [--video game.mp4] [--curve]
     python -m agents.evaluate --policy heuristic --episodes 100 [--env Pinball-v1]
     python -m agents.evaluate --model RUN_OR_ZIP --watch [--episodes 3]
+    python -m agents.evaluate --model pretrained:ppo-v1 --protocol
+    python -m agents.evaluate --recording my_games.json
 
 Each game is played to its end (the last ball drained, or the two-minute time limit), on seeds
 ``seed .. seed + episodes - 1`` (``--seed``, by default the config's ``eval_seed``, 100000). A
@@ -21,6 +23,16 @@ frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/P
   frames, with the random and heuristic baselines drawn in (from the run's report, or played
   on the same games, their results in ``OUT/random`` and ``OUT/heuristic``).
 
+``--protocol`` plays the benchmark protocol's games instead (``pinball_env.protocol``: the
+held-out seeds 100000-100099, the env's own table, 3 balls, two minutes, sticky actions 0.25;
+the agent keeps its own view of the game) and adds the protocol's metrics to ``summary.json``
+(``"protocol"``: mean and interquartile mean with 95% bootstrap intervals, the score normalised
+by random play and the heuristic), written to ``RUN/protocol_eval`` by default.
+``--recording FILE`` scores a play-tool recording (``python -m pinball_env.tools.play --protocol
+--record FILE``) on the protocol: every game is replayed and checked, the recording must be of
+the protocol's game, and its mean is the human score the protocol normalises by
+(``pinball_env.protocol.HUMAN_SCORES``).
+
 ``--watch`` plays the games in a window instead, at real speed (every frame shown at the
 table's frame rate), printing each score; close the window or press Ctrl-C to stop.
 
@@ -38,7 +50,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.config import ConfigError
-from agents.report import evaluate
+from agents.report import evaluate, score_recording
 
 # The functions of an evaluation, as agents.evaluate has always had them.
 from agents.report import report as report
@@ -53,6 +65,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     who = parser.add_mutually_exclusive_group(required=True)
     who.add_argument("--model", type=Path, help="a run folder or model zip (or RLlib checkpoint)")
     who.add_argument("--policy", choices=BASELINES, help="a baseline")
+    who.add_argument("--recording", type=Path, help="score a play-tool recording (a human's)")
+    parser.add_argument("--protocol", action="store_true", help="the benchmark protocol's games")
     parser.add_argument("--env", help="the baselines' env id (default: Pinball-v0)")
     parser.add_argument("--table", help="the baselines' table (default: the env's)")
     parser.add_argument("--episodes", type=int, default=100, help="games to play")
@@ -63,10 +77,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--watch", action="store_true", help="show the games in a window")
     args = parser.parse_args(argv)
     try:
+        if args.recording is not None:
+            return score_recording(args.recording, args.out)
         return evaluate(
             policy=args.policy, model_path=args.model, table=args.table, env=args.env,
             episodes=args.episodes, seed=args.seed, out=args.out, video=args.video,
-            curve=args.curve, watch=args.watch,
+            curve=args.curve, watch=args.watch, protocol=args.protocol,
         )  # fmt: skip
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")

@@ -20,6 +20,12 @@ oldest first, images channels first) and the observation statistics frozen as th
 saved. ``act(obs)`` takes one observation of that chain or a batch of them and returns the
 greedy action(s).
 
+The agents that ship with the project load by name: ``load_policy("pretrained:ppo-v1")``
+(:data:`PRETRAINED`; each a model zip in ``agents/pretrained/`` with a card, ``NAME.json``: its
+config, the commit it was trained at, its frames and minutes of training and its scores under
+the benchmark protocol). ``pretrained:NAME`` goes wherever a model path goes
+(``python -m agents.evaluate --model pretrained:ppo-v1 --watch``).
+
 A model zip saved by ``agents.train`` carries its config and its observation statistics (the
 entry ``pinball/agent.json``), so it loads copied alone; an older zip needs the run's
 ``config.yaml`` beside it or one folder up (and ``NAME_vecnormalize.pkl`` beside it when the
@@ -62,6 +68,31 @@ from agents.runs import (
     rllib_checkpoint,
     stats_for,
 )
+
+# The agents that ship with the project: agents/pretrained/NAME.zip, loadable as "pretrained:NAME".
+PRETRAINED_PREFIX = "pretrained:"
+PRETRAINED_DIR = Path(__file__).resolve().parent / "pretrained"
+PRETRAINED = tuple(sorted(path.stem for path in PRETRAINED_DIR.glob("*.zip")))
+
+
+def resolve_model_path(path: str | os.PathLike[str]) -> Path:
+    """``path``, or for ``"pretrained:NAME"`` the shipped model zip of that name."""
+    text = os.fspath(path)
+    if not text.startswith(PRETRAINED_PREFIX):
+        return Path(path)
+    name = text.removeprefix(PRETRAINED_PREFIX)
+    if name not in PRETRAINED:
+        raise ConfigError(
+            f"{text}: no such pretrained agent (shipped: "
+            f"{', '.join(PRETRAINED_PREFIX + known for known in PRETRAINED) or 'none'})"
+        )
+    return PRETRAINED_DIR / f"{name}.zip"
+
+
+def pretrained_card(name: str) -> dict[str, Any]:
+    """The card of the pretrained agent ``name`` (``agents/pretrained/NAME.json``)."""
+    resolve_model_path(PRETRAINED_PREFIX + name)  # (the error for an unknown name)
+    return json.loads((PRETRAINED_DIR / f"{name}.json").read_text())
 
 
 @dataclasses.dataclass(frozen=True)
@@ -239,9 +270,10 @@ class Policy:
 
 def load_policy(path: str | os.PathLike[str]) -> Policy:
     """The agent saved at ``path`` (see the module's docstring): a run folder (its final model,
-    or its newest checkpoint while it has none), a model or checkpoint zip, or an RLlib
-    checkpoint folder. Every loading of a saved agent in ``agents`` goes through here."""
-    path = Path(path)
+    or its newest checkpoint while it has none), a model or checkpoint zip, an RLlib
+    checkpoint folder, or ``"pretrained:NAME"``. Every loading of a saved agent in ``agents``
+    goes through here."""
+    path = resolve_model_path(path)
     if not path.exists():
         raise ConfigError(f"{path}: no such file or folder")
     if path.is_dir() and not is_rllib_checkpoint(path):

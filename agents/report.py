@@ -9,6 +9,7 @@ and ``game.gif`` into the run folder; ``plot_learning_curve`` draws a run's trai
 """
 
 import csv
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -19,7 +20,9 @@ from agents.config import (
     check_evaluation_seeds,
     config_from_dict,
     load_run_config,
+    protocol_config,
 )
+from agents.policy import PRETRAINED_PREFIX, resolve_model_path
 from agents.rollouts import (
     BASELINES,
     Player,
@@ -30,8 +33,10 @@ from agents.rollouts import (
 )
 from agents.runs import best_validation, progress_rows, validation_rows
 from agents.watch import record_video, watch_games
+from pinball_env.protocol import EVAL_SEEDS, aggregate, check_agent_options, protocol_options
 
 REPORT_FILE = "report.json"
+PROTOCOL_EVAL = "protocol_eval"  # a run's evaluation under the benchmark protocol
 
 
 def evaluate(
@@ -46,11 +51,15 @@ def evaluate(
     curve: bool = False,
     like: AnyConfig | None = None,
     watch: bool = False,
+    protocol: bool = False,
 ) -> dict[str, Any]:
     """Play ``episodes`` games with a model or a baseline, write the results into ``out``;
     returns the summary. A baseline plays the env ``env`` (default ``Pinball-v0``) on ``table``
     (default the env's), or the env (and layouts) of the config ``like``. With ``watch``, the
-    games are shown in a window instead (nothing is written)."""
+    games are shown in a window instead (nothing is written). With ``protocol``, the games are
+    the benchmark protocol's (``pinball_env.protocol``: its held-out seeds, its game, sticky
+    actions) and the summary adds its metrics (``"protocol"``: IQM, bootstrap intervals,
+    normalised scores)."""
     if (policy is None) == (model_path is None):
         raise ConfigError("give a model or a policy (random or heuristic), not both")
     if episodes < 1:
@@ -61,9 +70,18 @@ def evaluate(
             like = config_from_dict({"env": {**kwargs, **({"id": env} if env else {})}})
         player = baseline_player(policy, like)
         out = out or Path("evals") / policy
+    elif str(model_path).startswith(PRETRAINED_PREFIX):
+        player = trained_player(resolve_model_path(model_path))
+        out = out or Path("evals") / str(model_path).replace(":", "-")
     else:
         player = trained_player(model_path)
         out = out or (model_path if model_path.is_dir() else model_path.parent) / "eval"
+    if protocol:
+        if table is not None or seed is not None:
+            raise ConfigError("the protocol plays its own games: no table or seed with it")
+        player = dataclasses.replace(player, config=protocol_config(player.config))
+        seed = EVAL_SEEDS.start
+        out = out.parent / PROTOCOL_EVAL if out.name == "eval" else out
     first = player.config.eval_seed if seed is None else seed
     if player.trained:
         check_evaluation_seeds(player.config, first, episodes)
@@ -71,6 +89,10 @@ def evaluate(
         return watch_games(player.config, player.normalization, player.policy, first, episodes)
     rows = play_games(player, list(range(first, first + episodes)))
     summary = {"policy": player.name, "seeds": [first, first + episodes - 1], **summarize(rows)}
+    if protocol:
+        scores = [row["score"] for row in rows]
+        summary["protocol"] = {"env_id": player.config.env.id,
+                               **aggregate([scores], player.config.env.id)}  # fmt: skip
     write_results(out, rows, summary)
     if video is not None:
         record_video(player.config, player.normalization, player.policy, first, video)
@@ -83,6 +105,66 @@ def evaluate(
         f"truncated -> {out}"
     )
     return summary
+
+
+def score_recording(path: Path, out: Path | None = None) -> dict[str, Any]:
+    """Score the games of a play-tool recording (a human's) on the benchmark protocol: each
+    game replayed and checked (``pinball_env.tools.play.replay``), the recording refused
+    unless it is of a protocol env with the protocol's game and sticky actions; the summary
+    (the protocol's metrics of its games) is written to ``out`` (default ``evals/human``)."""
+    from pinball_env.tools.play import RecordingError, load_recording, replay
+
+    try:
+        recording = load_recording(path)
+        check_recording(recording)
+        scores = replay(recording)
+    except RecordingError as error:
+        raise ConfigError(str(error)) from None
+    env_id = recording.env_id
+    summary = {
+        "policy": f"human ({path})",
+        "seeds": [game.seed for game in recording.games],
+        "scores": scores,
+        "protocol": {"env_id": env_id, **aggregate([scores], env_id)},
+    }
+    out = out or Path("evals") / "human"
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    metrics = summary["protocol"]
+    print(
+        f"{path}: {len(scores)} games of {env_id} on the protocol, all replayed as recorded: "
+        f"score {metrics['score_mean']:.0f} (IQM {metrics['score_iqm']:.0f}), normalised "
+        f"{metrics['normalized_mean']:.2f} (random 0, heuristic 1) -> {out}"
+    )
+    return summary
+
+
+def check_recording(recording: Any) -> None:
+    """RecordingError unless ``recording`` was played on the protocol's game: a protocol env,
+    its own table, 3 balls, two minutes, sticky actions of the protocol, one frame a step."""
+    from pinball_env.tools.play import RecordingError
+
+    options = dict(recording.options)
+    try:
+        wanted = protocol_options(recording.env_id)
+        check_agent_options(recording.env_id, options, "the recording's options")
+    except ValueError as error:
+        raise RecordingError(str(error)) from None
+    played = {key: options.get(key, default) for key, default in
+              (("repeat_action_probability", 0.0), ("frame_skip", 1), ("balls", 3))}  # fmt: skip
+    limit = options.get("max_frames") or recording.max_episode_steps
+    problems = [
+        f"{key}={played[key]!r} (the protocol's: {wanted.get(key, 1)!r})"
+        for key in played
+        if played[key] != wanted.get(key, 1)
+    ]
+    if limit != wanted["max_frames"]:
+        problems.append(f"a game of {limit} frames (the protocol's: {wanted['max_frames']})")
+    if problems:
+        raise RecordingError(
+            f"not a game of the benchmark protocol: {', '.join(problems)} (record one with "
+            "python -m pinball_env.tools.play --protocol --record FILE)"
+        )
 
 
 def curve_with_baselines(run: Path, player: Player, first: int, episodes: int, out: Path) -> None:

@@ -28,6 +28,7 @@ import collections
 import copy
 import csv
 import io
+import json
 import time
 from pathlib import Path
 from typing import Any
@@ -222,6 +223,8 @@ def _train(
     left = config.total_timesteps - model.num_timesteps
     if left > 0 and not stop:
         model.learn(left, callback=callback, reset_num_timesteps=not resume)
+        # Where learning stopped (progress.csv's last row is the last whole rollout's).
+        record_trained(run, model.num_timesteps, callback.counter.frames)
     # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.
     last = f"step_{model.num_timesteps}"
     save_model(model, run / CHECKPOINTS, last, config)
@@ -271,6 +274,14 @@ def _model(
     if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
         model.learning_starts += model.num_timesteps
     return venv, model, keep_progress(run)
+
+
+def record_trained(run: Path, steps: int, frames: int) -> None:
+    """Write where training stopped, env steps and frames, into ``meta.json`` (``trained``)."""
+    meta_path = run / "meta.json"
+    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    meta["trained"] = {"steps": int(steps), "frames": int(frames)}
+    atomic_write(meta_path, lambda file: file.write(json.dumps(meta, indent=1).encode()))
 
 
 def warm_start(model: Any, venv: Any, config: TrainConfig, stop: StopRequest) -> int:

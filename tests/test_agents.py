@@ -59,7 +59,8 @@ def test_every_shipped_config_trains_and_evaluates(config, tmp_path):
     assert summary["episodes"] == 2 and summary["seeds"] == [100_000, 100_001]
     with open(run / "eval" / "episodes.csv") as file:
         rows = list(csv.DictReader(file))
-    assert [row["balls_lost"] for row in rows] == ["3", "3"]  # whole games
+    for row in rows:  # whole games: every ball lost, or the two minutes played
+        assert row["balls_lost"] == "3" or (row["truncated"] == "True" and row["length"] == "7200")
 
 
 @pytest.mark.parametrize("config", ["ppo", "dqn"])

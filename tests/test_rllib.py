@@ -283,3 +283,31 @@ def test_a_signal_saves_a_checkpoint_and_says_how_to_resume(tmp_path):
     assert steps > 0 and (checkpoint / "config.yaml").is_file()
     assert f"resume with: python -m agents.rllib --resume {run}" in err
     assert "Traceback" not in err
+
+
+def test_the_benchmark_sends_each_job_to_a_worker_node_and_gathers_its_folder(tmp_path, no_ray):
+    from ray.cluster_utils import Cluster
+
+    from agents import benchmark
+
+    # The head node has no CPU: every job runs on the worker, in its scratch folder, and only
+    # what comes back lands in OUT.
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 0})
+    worker = cluster.add_node(num_cpus=2)
+    try:
+        cluster.wait_for_nodes()
+        jobs = ["--methods", "random-v0", "ppo-v0", "--seeds", "0", "1"]
+        table = benchmark.main(["--tiny", "--address", cluster.address, "--out", str(tmp_path),
+                                *jobs])  # fmt: skip
+    finally:
+        ray.shutdown()
+        cluster.shutdown()
+    ppo = table["methods"]["ppo-v0"]
+    assert [run["seed"] for run in ppo["runs"]] == [0, 1]
+    for folder in (tmp_path / "ppo-v0" / "seed0", tmp_path / "ppo-v0" / "seed1",
+                   tmp_path / "random-v0"):  # fmt: skip
+        assert json.loads((folder / benchmark.JOB_FILE).read_text())["node"] == worker.node_id
+    for run in ppo["runs"]:
+        assert (tmp_path / run["run"] / "model.zip").is_file()
+        assert (tmp_path / run["run"] / "protocol_eval" / "episodes.csv").is_file()
+    assert (tmp_path / "benchmark.json").is_file() and (tmp_path / "profiles.png").is_file()

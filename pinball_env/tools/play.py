@@ -1,12 +1,15 @@
 """Play ``Pinball-v0`` or ``Pinball-v1`` on the keyboard: ``python -m pinball_env.tools.play``.
 
-``python -m pinball_env.tools.play [--env ID] [--table NAME] [--seed S] [--record FILE]`` opens
+``python -m pinball_env.tools.play [--env ID] [--table NAME] [--seed S] [--record FILE]
+[--protocol]`` opens
 a pygame window (the ``render`` extra) and plays at real speed, one env step per frame (the
 table's frame rate, 60 frames per second), with the score and the balls left on the scoreboard.
 ``--env Pinball-v1`` plays the whole cabinet (its table ``classic_v1``): the player's plunger,
 the nudge and the tilt, whose warnings and TILT the scoreboard shows. ``--table`` plays another
-table on the env (default: the env's own). ``--replay FILE [--headless]`` plays a recording back
-and checks that every game scores what was recorded.
+table on the env (default: the env's own). ``--protocol`` plays the benchmark protocol's game
+(sticky actions, ``pinball_env.protocol``): a recording of it is a human score that
+``python -m agents.evaluate --recording FILE`` scores on the protocol. ``--replay FILE
+[--headless]`` plays a recording back and checks that every game scores what was recorded.
 
 Keys (``PinballEnv.FLIPPER_KEYS`` and ``CABINET_KEYS``, the map of ``get_keys_to_action``; the
 cabinet's on a table that has one):
@@ -70,6 +73,7 @@ import numpy as np
 from pinball_env import __version__  # importing the package registers Pinball-v0
 from pinball_env.env import PinballEnv
 from pinball_env.game import discrete_action
+from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
 from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Window
 from pinball_env.table import Table, table_to_dict
 from pinball_env.tools.demo import has_display
@@ -640,6 +644,9 @@ def main(argv: list[str] | None = None) -> list[int]:
         "--table", help="table name or YAML path (default: the env's, classic or classic_v1)"
     )
     parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")
+    parser.add_argument(
+        "--protocol", action="store_true", help="the benchmark protocol's game (sticky actions)"
+    )
     modes = parser.add_mutually_exclusive_group()
     modes.add_argument("--record", type=Path, help="write the games played to this JSON file")
     modes.add_argument("--replay", type=Path, help="play a recording back and check its scores")
@@ -647,7 +654,11 @@ def main(argv: list[str] | None = None) -> list[int]:
     args = parser.parse_args(argv)
     if args.seed is not None and args.seed < 0:
         parser.error(f"--seed must be >= 0, got {args.seed}")
-    if args.replay is not None and (args.env or args.table or args.seed is not None):
+    if args.protocol and args.table:
+        parser.error("--protocol plays the env's own table")
+    if args.replay is not None and (
+        args.env or args.table or args.seed is not None or args.protocol
+    ):
         parser.error("--replay takes the env, the table and the seeds from the recording")
     if args.headless and args.replay is None:
         parser.error("--headless is for --replay: playing needs a window")
@@ -678,6 +689,8 @@ def main(argv: list[str] | None = None) -> list[int]:
             "no display found: playing needs a window (--replay FILE --headless replays without)"
         )
     options = {} if args.table is None else {"table": args.table}
+    if args.protocol:
+        options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
     loop = PlayLoop(options, args.seed, args.record, env_id=args.env or ENV_ID)
     print(keys_help(Window.import_pygame(), loop.env.unwrapped.game.cabinet))
     try:

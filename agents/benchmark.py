@@ -1,0 +1,563 @@
+"""The benchmark: named methods x training seeds under the protocol (``pinball_env.protocol``).
+
+    python -m agents.benchmark                                   # every method, seeds 0-4
+    python -m agents.benchmark --methods ppo-v1 heuristic-v1 --seeds 0 1 2 --parallel 2
+    python -m agents.benchmark --address auto                    # each run a Ray task
+    python -m agents.benchmark --tiny --out /tmp/bench           # a minute: the whole pipeline
+
+A method (:data:`METHODS`) is a training config of ``configs/agents/`` on a protocol env, or a
+baseline (``random``, ``heuristic``; one run, no training). Each method x seed is a job: train
+the config with ``seed=S`` for the protocol's frames (``total_frames``, no time limit) into
+``OUT/METHOD/seedS/RUN`` (``agents.train``'s run folder), then evaluate the run's model on the
+protocol's games (``RUN/protocol_eval``: ``agents.evaluate --protocol``). Jobs are resumable: a
+run with its evaluation is reused, a run without a model goes on from its last checkpoint, and
+a run whose config is not the one the job would train is an error (delete it or pick another
+``--out``). Locally the jobs run one at a time (``--parallel N``: N at once, each in its own
+process); with ``--address`` each is a Ray task with its own CPUs (the config's threads) on the
+cluster, which gets this code, trains and evaluates in a scratch folder and sends the run folder
+back (a partial run is sent out to go on with), so that a cluster gives the whole table in the
+time of one run.
+
+Then the results are aggregated into ``OUT``:
+
+- ``benchmark.json``: the protocol, the commit, and per method its env, config, runs (seed,
+  score mean and IQM, frames, minutes of training) and the protocol's metrics
+  (``pinball_env.protocol.aggregate``: mean and IQM of the score and of the normalised score,
+  with stratified bootstrap 95% intervals), and the reference means measured (random and the
+  heuristic, per env);
+- ``benchmark.csv`` (a row per method) and ``runs.csv`` (a row per run);
+- ``scores.png`` (the score distribution of every method's games, per env) and
+  ``profiles.png`` (performance profiles of the normalised scores with 95% bands, per env).
+
+``--ship METHOD ...`` makes each method's best run (by its validation games, never the held-out
+ones) a pretrained agent that ships with the project: ``agents/pretrained/METHOD.zip`` and its
+card ``METHOD.json`` (config, commit, training, scores under the protocol), loadable as
+``pretrained:METHOD`` (``agents.policy.load_policy``).
+
+``--tiny`` trains a few thousand frames of small settings and plays a few games: the whole
+pipeline in about a minute, for tests.
+"""
+
+import argparse
+import concurrent.futures
+import csv
+import dataclasses
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.config import ConfigError, TrainConfig, config_from_dict, load_config, load_run_config
+from agents.report import PROTOCOL_EVAL, evaluate
+from agents.runs import MODEL_FILE, progress_rows, source_commit
+from pinball_env import protocol
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs" / "agents"
+JOB_FILE = "job.json"  # in OUT/METHOD/seedS: where and how long the job trained and evaluated
+SUMMARY = "summary.json"
+
+
+@dataclasses.dataclass(frozen=True)
+class Method:
+    """A row of the benchmark: a training ``config`` (a file of configs/agents) or a
+    ``baseline``, on ``env_id``; ``tiny``: the overrides of ``--tiny``."""
+
+    env_id: str
+    config: str | None = None
+    baseline: str | None = None
+    tiny: tuple[str, ...] = ()
+
+    @property
+    def trained(self) -> bool:
+        return self.config is not None
+
+
+# Small settings for --tiny: a few updates of small networks.
+_TINY = ("imitation_steps=0", "validate_every=0", "checkpoint_every=0", "env.num_envs=2")
+_TINY_PPO = (*_TINY, "hyperparams.n_steps=64", "hyperparams.batch_size=64",
+             "hyperparams.n_epochs=1")  # fmt: skip
+
+METHODS: dict[str, Method] = {
+    "random-v1": Method("Pinball-v1", baseline="random"),
+    "heuristic-v1": Method("Pinball-v1", baseline="heuristic"),
+    "ppo-v1": Method("Pinball-v1", "ppo_v1.yaml", tiny=_TINY_PPO),
+    "a2c-v1": Method("Pinball-v1", "a2c_v1.yaml", tiny=(*_TINY, "hyperparams.n_steps=8")),
+    "dqn-v1": Method(
+        "Pinball-v1",
+        "dqn_v1.yaml",
+        tiny=(*_TINY, "hyperparams.learning_starts=200", "hyperparams.buffer_size=2000"),
+    ),
+    "ppo-pixels-v1": Method(
+        "Pinball-v1", "ppo_pixels_v1.yaml", tiny=(*_TINY_PPO, "env.kwargs.image_size=32")
+    ),
+    "random-v0": Method("Pinball-v0", baseline="random"),
+    "heuristic-v0": Method("Pinball-v0", baseline="heuristic"),
+    "ppo-v0": Method("Pinball-v0", "ppo.yaml", tiny=_TINY_PPO),
+}
+TINY_FRAMES = 3000
+TINY_EPISODES = 3
+
+
+@dataclasses.dataclass(frozen=True)
+class Settings:
+    """What every job of one benchmark shares."""
+
+    out: Path
+    episodes: int = len(protocol.EVAL_SEEDS)
+    tiny: bool = False
+
+    @property
+    def frames(self) -> int:
+        return TINY_FRAMES if self.tiny else protocol.TRAINING_FRAMES
+
+
+def job_folder(settings: Settings, name: str, seed: int) -> Path:
+    """Where a job's results go: ``OUT/METHOD/seedS`` (a baseline: ``OUT/METHOD``)."""
+    return settings.out / name / f"seed{seed}" if METHODS[name].trained else settings.out / name
+
+
+def job_config(name: str, seed: int, settings: Settings) -> TrainConfig:
+    """The training config of a job: the method's config, seed ``seed``, the protocol's budget
+    in frames and no time limit (and ``--tiny``'s settings)."""
+    method = METHODS[name]
+    overrides = [f"seed={seed}", "max_minutes=0", f"total_frames={settings.frames}"]
+    return load_config(
+        CONFIGS / method.config, [*overrides, *(method.tiny if settings.tiny else ())]
+    )
+
+
+def job_run(
+    name: str, seed: int, settings: Settings, config: TrainConfig | None = None
+) -> Path | None:
+    """The run folder of a job (None before it starts); ConfigError if it holds another config
+    than the job's (``config``, by default :func:`job_config`'s) or several runs."""
+    folder = job_folder(settings, name, seed)
+    runs = sorted(p for p in folder.glob("*") if (p / "config.yaml").is_file())
+    if len(runs) > 1:
+        raise ConfigError(f"{folder}: several run folders ({', '.join(p.name for p in runs)})")
+    if not runs:
+        return None
+    expected = config or job_config(name, seed, settings)
+    if load_run_config(runs[0]).to_dict() != expected.to_dict():
+        raise ConfigError(
+            f"{runs[0]}: trained with another config than {name} seed {seed} under the protocol "
+            "(delete it, or give another --out)"
+        )
+    return runs[0]
+
+
+def job_done(name: str, seed: int, settings: Settings, config: TrainConfig | None = None) -> bool:
+    """The job's evaluation is written (and so its training finished)."""
+    if not METHODS[name].trained:
+        return (job_folder(settings, name, seed) / PROTOCOL_EVAL / SUMMARY).is_file()
+    run = job_run(name, seed, settings, config)
+    return run is not None and (run / PROTOCOL_EVAL / SUMMARY).is_file()
+
+
+def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None = None) -> Path:
+    """Train (or go on training) and evaluate one method x seed; returns its results folder.
+    A finished job is left as it is. ``config``: the job's training config (by default
+    :func:`job_config`'s; a cluster node gets it from the driver, it has no configs/)."""
+    method, folder = METHODS[name], job_folder(settings, name, seed)
+    if method.trained and config is None:
+        config = job_config(name, seed, settings)
+    if job_done(name, seed, settings, config):
+        return folder
+    folder.mkdir(parents=True, exist_ok=True)
+    started = time.monotonic()
+    if not method.trained:
+        evaluate(policy=method.baseline, env=method.env_id, episodes=settings.episodes,
+                 out=folder / PROTOCOL_EVAL, protocol=True)  # fmt: skip
+        _log_job(folder, evaluate_seconds=time.monotonic() - started)
+        return folder
+    from agents.train import start, train
+
+    run = job_run(name, seed, settings, config)
+    if run is None or not (run / MODEL_FILE).is_file():
+        resume = run is not None
+        if run is None:
+            run = start(config, folder, ["agents.benchmark", name, f"seed={seed}"])
+        train(config, run, resume=resume, progress_bar=False)
+        _log_job(folder, train_seconds=time.monotonic() - started)
+    started = time.monotonic()
+    evaluate(model_path=run, episodes=settings.episodes, out=run / PROTOCOL_EVAL, protocol=True)
+    _log_job(folder, evaluate_seconds=time.monotonic() - started)
+    return folder
+
+
+def _log_job(folder: Path, node: str | None = None, **seconds: float) -> None:
+    """Add ``seconds`` (train_seconds, evaluate_seconds) to the job's record, with the host (and
+    the Ray ``node`` it ran on)."""
+    path = folder / JOB_FILE
+    record = json.loads(path.read_text()) if path.is_file() else {}
+    for key, value in seconds.items():
+        record[key] = round(record.get(key, 0.0) + value, 1)
+    if node is not None:
+        record["node"] = node
+    else:
+        record["host"] = os.uname().nodename
+    path.write_text(json.dumps(record, indent=1))
+
+
+# --- running the jobs ---------------------------------------------------------------------------
+
+
+def run_local(jobs: list[tuple[str, int]], settings: Settings, parallel: int) -> None:
+    """Each job in its own process (``python -m agents.benchmark --job``), ``parallel`` at once."""
+
+    def one(job: tuple[str, int]) -> None:
+        name, seed = job
+        command = [sys.executable, "-m", "agents.benchmark", "--job", f"{name}:{seed}",
+                   *_settings_args(settings)]  # fmt: skip
+        print(f"{name} seed {seed}: running")
+        done = subprocess.run(command, cwd=CONFIGS.parent.parent)
+        if done.returncode != 0:
+            raise RuntimeError(f"{name} seed {seed} failed (exit status {done.returncode})")
+        print(f"{name} seed {seed}: done")
+
+    with concurrent.futures.ThreadPoolExecutor(max_workers=parallel) as pool:
+        for future in [pool.submit(one, job) for job in jobs]:
+            future.result()
+
+
+def _settings_args(settings: Settings) -> list[str]:
+    return ["--out", str(settings.out), "--episodes", str(settings.episodes),
+            *(["--tiny"] if settings.tiny else [])]  # fmt: skip
+
+
+def pack(folder: Path) -> bytes:
+    """A folder as a gzipped tar (empty bytes for a missing folder)."""
+    if not folder.is_dir():
+        return b""
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode="w:gz") as archive:
+        archive.add(folder, arcname=".")
+    return buffer.getvalue()
+
+
+def unpack(data: bytes, folder: Path) -> None:
+    """:func:`pack`'s bytes into ``folder`` (replacing what it held)."""
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
+    with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as archive:
+        archive.extractall(folder, filter="data")
+
+
+def remote_job(
+    name: str, seed: int, settings: Settings, config: dict[str, Any] | None, partial: bytes
+) -> tuple[bytes, str]:
+    """A job on a cluster node: in a scratch folder, from ``partial`` (the folder as the driver
+    has it), run with ``config`` (the driver's, as data); returns the folder and the node's
+    id."""
+    import ray
+
+    with tempfile.TemporaryDirectory() as scratch:
+        here = dataclasses.replace(settings, out=Path(scratch))
+        folder = job_folder(here, name, seed)
+        if partial:
+            unpack(partial, folder)
+        run_job(name, seed, here, None if config is None else config_from_dict(config))
+        return pack(folder), ray.get_runtime_context().get_node_id()
+
+
+def run_on_cluster(jobs: list[tuple[str, int]], settings: Settings, address: str) -> None:
+    """Each job as a Ray task on the cluster at ``address``, its folder gathered into OUT."""
+    import ray
+
+    from agents.rllib import init_ray
+
+    init_ray(address)
+    task = ray.remote(remote_job)
+    pending = {}
+    for name, seed in jobs:
+        config = job_config(name, seed, settings) if METHODS[name].trained else None
+        folder = job_folder(settings, name, seed)
+        cpus = float(max(config.torch_threads, config.env_threads)) if config else 1.0
+        sent = task.options(num_cpus=cpus).remote(
+            name, seed, settings, config and config.to_dict(), pack(folder)
+        )
+        pending[sent] = (name, seed)
+    print(f"{len(pending)} jobs sent to the cluster at {address}")
+    while pending:
+        ready, _ = ray.wait(list(pending))
+        name, seed = pending.pop(ready[0])
+        data, node = ray.get(ready[0])
+        folder = job_folder(settings, name, seed)
+        unpack(data, folder)
+        _log_job(folder, node=node)
+        print(f"{name} seed {seed}: done on node {node}")
+
+
+# --- the table ----------------------------------------------------------------------------------
+
+
+def method_results(name: str, seeds: list[int], settings: Settings) -> dict[str, Any] | None:
+    """The runs of a method that are done and the protocol's metrics over them (None: none)."""
+    method = METHODS[name]
+    runs = []
+    for seed in seeds if method.trained else [0]:
+        if not job_done(name, seed, settings):
+            continue
+        folder = job_folder(settings, name, seed)
+        run = job_run(name, seed, settings) if method.trained else folder
+        with open(run / PROTOCOL_EVAL / "episodes.csv") as file:
+            scores = [int(row["score"]) for row in csv.DictReader(file)]
+        job = json.loads((folder / JOB_FILE).read_text()) if (folder / JOB_FILE).is_file() else {}
+        runs.append({
+            "seed": seed if method.trained else None,
+            "run": str(run.relative_to(settings.out)),
+            "scores": scores,
+            "score_mean": float(np.mean(scores)),
+            "score_iqm": protocol.iqm(scores),
+            **(_training(run, job) if method.trained else {}),
+        })  # fmt: skip
+    if not runs:
+        return None
+    metrics = protocol.aggregate([run["scores"] for run in runs], method.env_id)
+    return {"env_id": method.env_id, "config": method.config, "baseline": method.baseline,
+            **metrics, "runs": runs}  # fmt: skip
+
+
+def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
+    """A run's frames and steps trained and its minutes of training (the job's record, or for a
+    run trained outside the benchmark, from its start to its model)."""
+    meta = json.loads((run / "meta.json").read_text())
+    rows = progress_rows(run)  # (a run from before meta.json's "trained": its last rollout's)
+    trained = meta.get("trained") or {
+        "frames": max((int(float(row["time/frames"])) for row in rows if row.get("time/frames")),
+                      default=0),
+        "steps": max((int(float(row["time/total_timesteps"])) for row in rows), default=0),
+    }  # fmt: skip
+    frames, steps = trained["frames"], trained["steps"]
+    seconds = job.get("train_seconds")
+    if seconds is None:
+        started = time.mktime(time.strptime(meta["started"], "%Y-%m-%dT%H:%M:%S"))
+        seconds = (run / MODEL_FILE).stat().st_mtime - started
+    return {"frames": frames, "steps": steps, "train_minutes": round(seconds / 60.0, 1)}
+
+
+def aggregate_table(names: list[str], seeds: list[int], settings: Settings) -> dict[str, Any]:
+    """Write benchmark.json, benchmark.csv, runs.csv and the plots; returns the table."""
+    methods = {name: result for name in names
+               if (result := method_results(name, seeds, settings)) is not None}  # fmt: skip
+    reference: dict[str, dict[str, float]] = {}
+    for name, result in methods.items():
+        if METHODS[name].baseline is not None:
+            reference.setdefault(result["env_id"], {})[METHODS[name].baseline] = result[
+                "score_mean"
+            ]
+    table = {
+        "protocol": {
+            "env_ids": list(protocol.ENV_IDS),
+            "repeat_action_probability": protocol.REPEAT_ACTION_PROBABILITY,
+            "game": protocol.GAME_OPTIONS,
+            "training_frames": settings.frames,
+            "eval_seeds": [
+                protocol.EVAL_SEEDS.start,
+                protocol.EVAL_SEEDS.start + settings.episodes - 1,
+            ],
+            "reference_scores": protocol.REFERENCE_SCORES,
+            "human_scores": protocol.HUMAN_SCORES,
+            "tiny": settings.tiny,
+        },
+        "commit": source_commit(),
+        "reference_measured": reference,
+        "methods": methods,
+    }
+    settings.out.mkdir(parents=True, exist_ok=True)
+    (settings.out / "benchmark.json").write_text(json.dumps(table, indent=1))
+    _write_csvs(methods, settings.out)
+    if methods:
+        plot_benchmark(methods, settings.out)
+    return table
+
+
+METHOD_COLUMNS = ("method", "env_id", "runs", "games", "score_mean", "score_mean_low",
+                  "score_mean_high", "score_iqm", "score_iqm_low", "score_iqm_high",
+                  "normalized_mean", "normalized_mean_low", "normalized_mean_high",
+                  "normalized_iqm", "normalized_iqm_low", "normalized_iqm_high",
+                  "train_minutes_mean")  # fmt: skip
+RUN_COLUMNS = ("method", "env_id", "seed", "run", "score_mean", "score_iqm", "frames", "steps",
+               "train_minutes")  # fmt: skip
+
+
+def _write_csvs(methods: dict[str, Any], out: Path) -> None:
+    rows, run_rows = [], []
+    for name, result in methods.items():
+        row = {"method": name, "env_id": result["env_id"], "runs": len(result["runs"]),
+               "games": result["games"]}  # fmt: skip
+        for key in ("score_mean", "score_iqm", "normalized_mean", "normalized_iqm"):
+            row[key] = round(result[key], 3)
+            row[f"{key}_low"], row[f"{key}_high"] = (round(v, 3) for v in result[f"{key}_ci95"])
+        minutes = [run["train_minutes"] for run in result["runs"] if "train_minutes" in run]
+        row["train_minutes_mean"] = round(float(np.mean(minutes)), 1) if minutes else ""
+        rows.append(row)
+        for run in result["runs"]:
+            run_rows.append({"method": name, "env_id": result["env_id"],
+                             **{key: run.get(key, "") for key in RUN_COLUMNS[2:]}})  # fmt: skip
+    for path, columns, table in ((out / "benchmark.csv", METHOD_COLUMNS, rows),
+                                 (out / "runs.csv", RUN_COLUMNS, run_rows)):  # fmt: skip
+        with open(path, "w", newline="") as file:
+            writer = csv.DictWriter(file, fieldnames=columns)
+            writer.writeheader()
+            writer.writerows(table)
+
+
+def plot_benchmark(methods: dict[str, Any], out: Path) -> None:
+    """``scores.png`` (every method's game scores, per env) and ``profiles.png`` (performance
+    profiles of the normalised scores with 95% bands, per env)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    envs = [env for env in protocol.ENV_IDS if any(m["env_id"] == env for m in methods.values())]
+    for kind in ("scores", "profiles"):
+        figure, axes = plt.subplots(1, len(envs), figsize=(6.0 * len(envs), 4.0), squeeze=False)
+        for ax, env_id in zip(axes[0], envs, strict=True):
+            names = [name for name, m in methods.items() if m["env_id"] == env_id]
+            if kind == "scores":
+                data = [
+                    np.concatenate([run["scores"] for run in methods[n]["runs"]]) for n in names
+                ]
+                ax.boxplot(data, showmeans=True)
+                ax.set_xticks(range(1, len(names) + 1), names, rotation=20)
+                ax.set_ylabel("game score")
+            else:
+                taus = protocol.PROFILE_TAUS
+                for name in names:
+                    runs = [protocol.normalized(run["scores"], env_id)
+                            for run in methods[name]["runs"]]  # fmt: skip
+                    curve = protocol.performance_profile(runs)
+                    low, high = protocol.profile_band(runs)
+                    ax.plot(taus, curve, label=name)
+                    ax.fill_between(taus, low, high, alpha=0.2)
+                ax.axvline(1.0, color="grey", linewidth=0.8, linestyle=":")
+                ax.set_xlabel("normalised score τ (random 0, heuristic 1)")
+                ax.set_ylabel("share of games scoring > τ")
+                ax.legend(fontsize=8)
+            ax.set_title(f"{env_id}, the protocol's games")
+        figure.tight_layout()
+        figure.savefig(out / f"{kind}.png", dpi=100)
+        plt.close(figure)
+
+
+# The first protocol games a pretrained agent's card lists the scores of (its test plays them).
+CHECK_GAMES = 5
+
+
+def ship(name: str, seeds: list[int], settings: Settings) -> Path:
+    """Make the best run of method ``name`` (by its validation games, never the held-out ones)
+    a pretrained agent: ``agents/pretrained/NAME.zip`` (its model) and ``NAME.json``, its card:
+    the config, the commit it was trained at, its frames and minutes of training, its scores
+    under the protocol, and the scores of the first CHECK_GAMES protocol games."""
+    from agents.policy import PRETRAINED_DIR
+    from agents.runs import best_validation, validation_rows
+
+    result = method_results(name, seeds, settings)
+    if result is None or not METHODS[name].trained:
+        raise ConfigError(f"{name}: no finished training run to ship in {settings.out}")
+
+    def validation(run: dict[str, Any]) -> float:
+        best = best_validation(validation_rows(settings.out / run["run"]))
+        return best["score_mean"] if best else run["score_mean"]
+
+    chosen = max(result["runs"], key=validation)
+    run = settings.out / chosen["run"]
+    meta = json.loads((run / "meta.json").read_text())
+    card = {
+        "name": name,
+        "env_id": result["env_id"],
+        "config": METHODS[name].config,
+        "seed": chosen["seed"],
+        "commit": meta.get("commit"),
+        "trained": {key: chosen[key] for key in ("frames", "steps", "train_minutes")},
+        "chosen_by": f"the best validation score of {len(result['runs'])} seeds "
+        f"({validation(chosen):.0f})",
+        "protocol": {
+            key: value
+            for key, value in protocol.aggregate([chosen["scores"]], result["env_id"]).items()
+            if key != "run_means"
+        },
+        "check_games": {
+            "seeds": list(protocol.EVAL_SEEDS[:CHECK_GAMES]),
+            "scores": chosen["scores"][:CHECK_GAMES],
+        },
+        "load": f'agents.policy.load_policy("pretrained:{name}")',
+    }
+    PRETRAINED_DIR.mkdir(exist_ok=True)
+    shutil.copyfile(run / MODEL_FILE, PRETRAINED_DIR / f"{name}.zip")
+    (PRETRAINED_DIR / f"{name}.json").write_text(json.dumps(card, indent=1) + "\n")
+    print(f"shipped {run} as pretrained:{name} ({card['chosen_by']})")
+    return PRETRAINED_DIR / f"{name}.zip"
+
+
+def print_table(table: dict[str, Any]) -> None:
+    for name, result in table["methods"].items():
+        low, high = result["score_iqm_ci95"]
+        print(
+            f"{name:14s} {result['env_id']}  runs {len(result['runs'])}  score mean "
+            f"{result['score_mean']:8.0f}  IQM {result['score_iqm']:8.0f} ({low:.0f}-{high:.0f})  "
+            f"normalised {result['normalized_mean']:.2f}"
+        )
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any] | None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--methods", nargs="+", choices=list(METHODS), default=list(METHODS),
+                        help="the rows (default: all)")  # fmt: skip
+    parser.add_argument("--seeds", nargs="+", type=int, default=list(protocol.TRAINING_SEEDS),
+                        help="training seeds (default: the protocol's)")  # fmt: skip
+    parser.add_argument("--out", type=Path, default=Path("runs/benchmark"), help="results")
+    parser.add_argument("--episodes", type=int, help="held-out games per run (default: 100)")
+    parser.add_argument("--parallel", type=int, default=1, help="local jobs at once")
+    parser.add_argument("--address", help="a Ray cluster to run the jobs on (auto, HOST:PORT)")
+    parser.add_argument("--tiny", action="store_true", help="tiny settings, for tests")
+    parser.add_argument("--job", help=argparse.SUPPRESS)  # METHOD:SEED, one job (run_local's)
+    parser.add_argument("--table-only", action="store_true", help="aggregate what is done")
+    parser.add_argument("--ship", nargs="+", metavar="METHOD", choices=list(METHODS),
+                        help="make each method's best run a pretrained agent")  # fmt: skip
+    args = parser.parse_args(argv)
+    if args.episodes is None:
+        args.episodes = TINY_EPISODES if args.tiny else len(protocol.EVAL_SEEDS)
+    if args.parallel < 1 or not 1 <= args.episodes <= len(protocol.EVAL_SEEDS):
+        parser.error("--parallel must be >= 1 and --episodes in 1..100")
+    if any(seed < 0 for seed in args.seeds):
+        parser.error("seeds must be >= 0")
+    settings = Settings(args.out.resolve(), args.episodes, args.tiny)
+    try:
+        if args.job is not None:
+            name, _, seed = args.job.partition(":")
+            run_job(name, int(seed), settings)
+            return None
+        jobs = [(name, seed) for name in args.methods
+                for seed in (args.seeds if METHODS[name].trained else [0])]  # fmt: skip
+        todo = [job for job in jobs if not job_done(*job, settings)]
+        if todo and not args.table_only:
+            print(f"{len(jobs) - len(todo)} of {len(jobs)} jobs done already; running {len(todo)}")
+            if args.address:
+                run_on_cluster(todo, settings, args.address)
+            else:
+                run_local(todo, settings, args.parallel)
+        table = aggregate_table(args.methods, args.seeds, settings)
+        for name in args.ship or ():
+            ship(name, args.seeds, settings)
+    except ConfigError as error:
+        parser.exit(2, f"error: {error}\n")
+    print_table(table)
+    print(f"-> {settings.out}/benchmark.json, benchmark.csv, runs.csv, scores.png, profiles.png")
+    return table
+
+
+if __name__ == "__main__":
+    main()

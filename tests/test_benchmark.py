@@ -1,0 +1,154 @@
+"""python -m agents.benchmark (--tiny): jobs, resumes, the table; scoring a recording on the
+protocol."""
+
+import csv
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from agents import benchmark
+from agents.config import ConfigError
+from agents.evaluate import main as evaluate_main
+from agents.runs import MODEL_FILE
+from pinball_env import protocol
+from pinball_env.tools import play
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory) -> tuple[Path, dict]:
+    out = tmp_path_factory.mktemp("bench")
+    table = benchmark.main(["--tiny", "--out", str(out), "--methods", "random-v0", "ppo-v0",
+                            "--seeds", "0", "1", "--parallel", "2"])  # fmt: skip
+    return out, table
+
+
+def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
+    out, table = tiny
+    assert set(table["methods"]) == {"random-v0", "ppo-v0"}
+    ppo = table["methods"]["ppo-v0"]
+    assert [run["seed"] for run in ppo["runs"]] == [0, 1]
+    assert ppo["games"] == 2 * benchmark.TINY_EPISODES and ppo["env_id"] == "Pinball-v0"
+    for run in ppo["runs"]:
+        assert run["frames"] >= benchmark.TINY_FRAMES  # trained to the budget, no further
+        assert run["frames"] < benchmark.TINY_FRAMES + 2 * 64 * 61  # (the rollout it stopped in)
+        assert (out / run["run"] / MODEL_FILE).is_file()
+        summary = json.loads((out / run["run"] / "protocol_eval" / "summary.json").read_text())
+        assert summary["seeds"] == [100_000, 100_000 + benchmark.TINY_EPISODES - 1]
+        assert summary["protocol"]["score_mean"] == run["score_mean"]
+    pooled = np.concatenate([run["scores"] for run in ppo["runs"]])
+    assert ppo["score_mean"] == pooled.mean() and ppo["score_iqm"] == protocol.iqm(pooled)
+    assert (
+        table["reference_measured"]["Pinball-v0"]["random"]
+        == (table["methods"]["random-v0"]["score_mean"])
+    )
+    saved = json.loads((out / "benchmark.json").read_text())
+    assert saved["methods"]["ppo-v0"]["score_mean"] == ppo["score_mean"]
+    assert saved["protocol"]["repeat_action_probability"] == 0.25
+    with open(out / "benchmark.csv") as file:
+        rows = {row["method"]: row for row in csv.DictReader(file)}
+    assert float(rows["ppo-v0"]["score_iqm"]) == pytest.approx(ppo["score_iqm"], abs=1e-3)
+    with open(out / "runs.csv") as file:
+        assert len(list(csv.DictReader(file))) == 3  # two PPO runs, one random
+    for picture in ("scores.png", "profiles.png"):
+        assert (out / picture).stat().st_size > 10_000
+
+
+def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
+    out, table = tiny
+    run = out / table["methods"]["ppo-v0"]["runs"][1]["run"]
+    first_model = (out / table["methods"]["ppo-v0"]["runs"][0]["run"] / MODEL_FILE).stat()
+    # The second run lost its model and evaluation (stopped before the end): it goes on from
+    # its last checkpoint; the finished first run is left alone.
+    (run / MODEL_FILE).unlink()
+    for path in (run / "protocol_eval").iterdir():
+        path.unlink()
+    again = benchmark.main(["--tiny", "--out", str(out), "--methods", "random-v0", "ppo-v0",
+                            "--seeds", "0", "1"])  # fmt: skip
+    assert (run / MODEL_FILE).is_file() and (run / "progress_0.csv").is_file()
+    first = out / table["methods"]["ppo-v0"]["runs"][0]["run"] / MODEL_FILE
+    assert first.stat().st_mtime_ns == first_model.st_mtime_ns
+    assert again["methods"]["ppo-v0"]["runs"][0] == table["methods"]["ppo-v0"]["runs"][0]
+
+
+def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
+    out, table = tiny
+    run = out / table["methods"]["ppo-v0"]["runs"][0]["run"]
+    copy = tmp_path / "ppo-v0" / "seed0" / run.name
+    copy.mkdir(parents=True)
+    text = (run / "config.yaml").read_text().replace("total_frames: 3000", "total_frames: 4000")
+    (copy / "config.yaml").write_text(text)
+    settings = benchmark.Settings(tmp_path, tiny=True)
+    with pytest.raises(ConfigError, match="trained with another config than ppo-v0 seed 0"):
+        benchmark.job_run("ppo-v0", 0, settings)
+
+
+def protocol_recording(path: Path, options: dict, seeds: list[int]) -> list[int]:
+    """Write a play-tool recording of random play of Pinball-v0 with ``options``."""
+    env = play.make_env(options, 7200, "Pinball-v0")
+    rng = np.random.default_rng(0)
+    games = []
+    for seed in seeds:
+        env.reset(seed=seed)
+        actions, done = [], False
+        while not done:
+            actions.append(int(rng.integers(4)))
+            _, _, terminated, truncated, info = env.step(actions[-1])
+            done = terminated or truncated
+        end = "game over" if terminated else "time limit"
+        games.append(play.GameRecord(seed, "".join(map(str, actions)), info["score"],
+                                     info["frames"], end))  # fmt: skip
+    recording = play.Recording("Pinball-v0", {"table": "classic", **options}, 7200,
+                               play.table_sha256(env.unwrapped.table), tuple(games))  # fmt: skip
+    play.write_recording(path, recording)
+    return [game.score for game in games]
+
+
+def test_a_recording_is_scored_on_the_protocol(tmp_path):
+    path = tmp_path / "human.json"
+    scores = protocol_recording(path, {"repeat_action_probability": 0.25}, [7, 8])
+    summary = evaluate_main(["--recording", str(path), "--out", str(tmp_path / "eval")])
+    assert summary["scores"] == scores
+    metrics = summary["protocol"]
+    assert metrics["score_mean"] == np.mean(scores)
+    assert metrics["normalized_mean"] == pytest.approx(
+        float(np.mean(protocol.normalized(scores, "Pinball-v0")))
+    )
+    assert json.loads((tmp_path / "eval" / "summary.json").read_text())["scores"] == scores
+
+
+def test_a_recording_off_the_protocol_is_refused(tmp_path, capsys):
+    path = tmp_path / "plain.json"
+    protocol_recording(path, {}, [7])
+    with pytest.raises(SystemExit):
+        evaluate_main(["--recording", str(path)])
+    assert "repeat_action_probability=0.0 (the protocol's: 0.25)" in capsys.readouterr().err
+    protocol_recording(path, {"repeat_action_probability": 0.25, "balls": 1}, [7])
+    with pytest.raises(SystemExit):
+        evaluate_main(["--recording", str(path)])
+    assert "balls=1" in capsys.readouterr().err
+
+
+def test_the_protocol_evaluation_plays_sticky_held_out_games(tmp_path):
+    summary = evaluate_main(["--policy", "heuristic", "--env", "Pinball-v1", "--protocol",
+                             "--episodes", "2", "--out", str(tmp_path)])  # fmt: skip
+    assert summary["seeds"] == [100_000, 100_001]
+    with open(tmp_path / "episodes.csv") as file:
+        scores = [int(row["score"]) for row in csv.DictReader(file)]
+    # The same games by hand: the env with the protocol's options, the heuristic playing.
+    from pinball_env.heuristic import HeuristicPolicy
+
+    for seed, score in zip((100_000, 100_001), scores, strict=True):
+        env = gym.make("Pinball-v1", **protocol.protocol_options("Pinball-v1"))
+        player = HeuristicPolicy(env.unwrapped.table)
+        _, info = env.reset(seed=seed)
+        done = False
+        while not done:
+            _, _, terminated, truncated, info = env.step(player(info))
+            done = terminated or truncated
+        assert info["score"] == score
+    assert summary["protocol"]["score_mean"] == np.mean(scores)
