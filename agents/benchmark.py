@@ -25,7 +25,8 @@ Then the results are aggregated into ``OUT``:
   (``pinball_env.protocol.aggregate``: mean and IQM of the score and of the normalised score,
   with stratified bootstrap 95% intervals), and the reference means measured (random and the
   heuristic, per env);
-- ``benchmark.csv`` (a row per method) and ``runs.csv`` (a row per run);
+- ``benchmark.csv`` (a row per method), ``runs.csv`` (a row per run) and ``benchmark.md`` (the
+  table in Markdown);
 - ``scores.png`` (the score distribution of every method's games, per env) and
   ``profiles.png`` (performance profiles of the normalised scores with 95% bands, per env).
 
@@ -377,6 +378,7 @@ def aggregate_table(names: list[str], seeds: list[int], settings: Settings) -> d
     settings.out.mkdir(parents=True, exist_ok=True)
     (settings.out / "benchmark.json").write_text(json.dumps(table, indent=1))
     _write_csvs(methods, settings.out)
+    (settings.out / "benchmark.md").write_text(markdown_table(methods))
     if methods:
         plot_benchmark(methods, settings.out)
     return table
@@ -413,6 +415,29 @@ def _write_csvs(methods: dict[str, Any], out: Path) -> None:
             writer.writerows(table)
 
 
+def markdown_table(methods: dict[str, Any]) -> str:
+    """The table as Markdown (``benchmark.md``, the README's): a row per method."""
+    lines = [
+        "| method | env | runs | score: mean [95% CI] | IQM [95% CI] | normalised IQM [95% CI] "
+        "| training per run |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, result in methods.items():
+        cells = []
+        for key, digits in (("score_mean", 0), ("score_iqm", 0), ("normalized_iqm", 2)):
+            low, high = result[f"{key}_ci95"]
+            cells.append(f"{result[key]:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]")
+        runs = [run for run in result["runs"] if "frames" in run]
+        training = "-"
+        if runs:
+            frames = np.mean([run["frames"] for run in runs]) / 1e6
+            minutes = np.mean([run["train_minutes"] for run in runs])
+            training = f"{frames:.1f}M frames, {minutes:.0f} min"
+        lines.append(f"| {name} | {result['env_id']} | {len(result['runs'])} | "
+                     f"{' | '.join(cells)} | {training} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
 def plot_benchmark(methods: dict[str, Any], out: Path) -> None:
     """``scores.png`` (every method's game scores, per env) and ``profiles.png`` (performance
     profiles of the normalised scores with 95% bands, per env)."""
@@ -422,34 +447,40 @@ def plot_benchmark(methods: dict[str, Any], out: Path) -> None:
     import matplotlib.pyplot as plt
 
     envs = [env for env in protocol.ENV_IDS if any(m["env_id"] == env for m in methods.values())]
-    for kind in ("scores", "profiles"):
+    for kind, draw in (("scores", _draw_scores), ("profiles", _draw_profiles)):
         figure, axes = plt.subplots(1, len(envs), figsize=(6.0 * len(envs), 4.0), squeeze=False)
         for ax, env_id in zip(axes[0], envs, strict=True):
-            names = [name for name, m in methods.items() if m["env_id"] == env_id]
-            if kind == "scores":
-                data = [
-                    np.concatenate([run["scores"] for run in methods[n]["runs"]]) for n in names
-                ]
-                ax.boxplot(data, showmeans=True)
-                ax.set_xticks(range(1, len(names) + 1), names, rotation=20)
-                ax.set_ylabel("game score")
-            else:
-                taus = protocol.PROFILE_TAUS
-                for name in names:
-                    runs = [protocol.normalized(run["scores"], env_id)
-                            for run in methods[name]["runs"]]  # fmt: skip
-                    curve = protocol.performance_profile(runs)
-                    low, high = protocol.profile_band(runs)
-                    ax.plot(taus, curve, label=name)
-                    ax.fill_between(taus, low, high, alpha=0.2)
-                ax.axvline(1.0, color="grey", linewidth=0.8, linestyle=":")
-                ax.set_xlabel("normalised score τ (random 0, heuristic 1)")
-                ax.set_ylabel("share of games scoring > τ")
-                ax.legend(fontsize=8)
+            runs = {name: [np.asarray(run["scores"], dtype=np.float64) for run in m["runs"]]
+                    for name, m in methods.items() if m["env_id"] == env_id}  # fmt: skip
+            draw(ax, runs, env_id)
             ax.set_title(f"{env_id}, the protocol's games")
         figure.tight_layout()
         figure.savefig(out / f"{kind}.png", dpi=100)
         plt.close(figure)
+
+
+def _draw_scores(ax: Any, runs: dict[str, list[np.ndarray]], env_id: str) -> None:
+    ax.boxplot([np.concatenate(games) for games in runs.values()], showmeans=True)
+    ax.set_xticks(range(1, len(runs) + 1), list(runs), rotation=20)
+    ax.set_ylabel("game score")
+
+
+def _draw_profiles(ax: Any, runs: dict[str, list[np.ndarray]], env_id: str) -> None:
+    normalized = {name: [protocol.normalized(games, env_id) for games in method_runs]
+                  for name, method_runs in runs.items()}  # fmt: skip
+    # The protocol's thresholds, widened to hold 98% of these games.
+    taus = protocol.PROFILE_TAUS
+    pooled = np.concatenate([np.concatenate(method_runs) for method_runs in normalized.values()])
+    low, high = np.percentile(pooled, [1, 99])
+    if low < taus[0] or high > taus[-1]:
+        taus = np.linspace(min(low, taus[0]), max(high, taus[-1]), len(taus))
+    for name, method_runs in normalized.items():
+        ax.plot(taus, protocol.performance_profile(method_runs, taus), label=name)
+        ax.fill_between(taus, *protocol.profile_band(method_runs, taus), alpha=0.2)
+    ax.axvline(1.0, color="grey", linewidth=0.8, linestyle=":")
+    ax.set_xlabel("normalised score τ (random 0, heuristic 1)")
+    ax.set_ylabel("share of games scoring > τ")
+    ax.legend(fontsize=8)
 
 
 # The first protocol games a pretrained agent's card lists the scores of (its test plays them).

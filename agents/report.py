@@ -33,7 +33,13 @@ from agents.rollouts import (
 )
 from agents.runs import best_validation, progress_rows, validation_rows
 from agents.watch import record_video, watch_games
-from pinball_env.protocol import EVAL_SEEDS, aggregate, check_agent_options, protocol_options
+from pinball_env.protocol import (
+    EVAL_SEEDS,
+    GAME_OPTIONS,
+    REPEAT_ACTION_PROBABILITY,
+    aggregate,
+    check_agent_options,
+)
 
 REPORT_FILE = "report.json"
 PROTOCOL_EVAL = "protocol_eval"  # a run's evaluation under the benchmark protocol
@@ -77,8 +83,10 @@ def evaluate(
         player = trained_player(model_path)
         out = out or (model_path if model_path.is_dir() else model_path.parent) / "eval"
     if protocol:
-        if table is not None or seed is not None:
-            raise ConfigError("the protocol plays its own games: no table or seed with it")
+        if table is not None or seed is not None or episodes > len(EVAL_SEEDS):
+            raise ConfigError(
+                f"the protocol plays its own games: no table or seed, at most {len(EVAL_SEEDS)}"
+            )
         player = dataclasses.replace(player, config=protocol_config(player.config))
         seed = EVAL_SEEDS.start
         out = out.parent / PROTOCOL_EVAL if out.name == "eval" else out
@@ -146,20 +154,16 @@ def check_recording(recording: Any) -> None:
 
     options = dict(recording.options)
     try:
-        wanted = protocol_options(recording.env_id)
         check_agent_options(recording.env_id, options, "the recording's options")
     except ValueError as error:
         raise RecordingError(str(error)) from None
-    played = {key: options.get(key, default) for key, default in
-              (("repeat_action_probability", 0.0), ("frame_skip", 1), ("balls", 3))}  # fmt: skip
+    wanted = {"repeat_action_probability": REPEAT_ACTION_PROBABILITY, "frame_skip": 1}
+    played = {"repeat_action_probability": 0.0, "frame_skip": 1, **options}
+    problems = [f"{key}={played[key]!r} (the protocol's: {value!r})"
+                for key, value in wanted.items() if played[key] != value]  # fmt: skip
     limit = options.get("max_frames") or recording.max_episode_steps
-    problems = [
-        f"{key}={played[key]!r} (the protocol's: {wanted.get(key, 1)!r})"
-        for key in played
-        if played[key] != wanted.get(key, 1)
-    ]
-    if limit != wanted["max_frames"]:
-        problems.append(f"a game of {limit} frames (the protocol's: {wanted['max_frames']})")
+    if limit != GAME_OPTIONS["max_frames"]:
+        problems.append(f"a game of {limit} frames (the protocol's: {GAME_OPTIONS['max_frames']})")
     if problems:
         raise RecordingError(
             f"not a game of the benchmark protocol: {', '.join(problems)} (record one with "
