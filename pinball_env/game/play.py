@@ -204,39 +204,22 @@ def play_step(
                 ):
                     stage[env] = STEP_DONE
                     continue
+                # The buttons the frame presses (state.pressed): the action's (released after
+                # its frames), or with sticky actions, where the frame's draw says so, the last
+                # frame's again (ALE's).
                 n_flippers = flipper_command.shape[1]
-                # Sticky actions (ALE's): the frame presses what the last one pressed, where
-                # its draw says so; state.pressed keeps the buttons each frame pressed.
-                sticky = rules.repeat_probability > 0.0
-                if sticky and not progress.repeat_draws[env, k] < rules.repeat_probability:
+                repeat = rules.repeat_probability
+                if not (repeat > 0.0 and progress.repeat_draws[env, k] < repeat):
                     for j in range(n_flippers):
                         state.pressed[env, j] = held and commands[env, j]
                     for j in range(cabinet_buttons.shape[1]):
                         state.pressed[env, n_flippers + j] = held and cabinet_buttons[env, j]
                 for j in range(n_flippers):
-                    pressed = state.pressed[env, j] if sticky else held and commands[env, j]
-                    flipper_command[env, j] = pressed and not tilted[env]
+                    flipper_command[env, j] = state.pressed[env, j] and not tilted[env]
                 if rules.cabinet:
-                    plunger = (
-                        state.pressed[env, n_flippers]
-                        if sticky
-                        else (held and cabinet_buttons[env, 0])
-                    )
-                    left = (
-                        state.pressed[env, n_flippers + 1]
-                        if sticky
-                        else (held and cabinet_buttons[env, 1])
-                    )
-                    right = (
-                        state.pressed[env, n_flippers + 2]
-                        if sticky
-                        else (held and cabinet_buttons[env, 2])
-                    )
-                    up = (
-                        state.pressed[env, n_flippers + 3]
-                        if sticky
-                        else (held and cabinet_buttons[env, 3])
-                    )
+                    cab = n_flippers  # the cabinet's buttons follow the flippers'
+                    plunger, left = state.pressed[env, cab], state.pressed[env, cab + 1]
+                    right, up = state.pressed[env, cab + 2], state.pressed[env, cab + 3]
                     # The plunger: pulled back while its button is held, fired when let go.
                     if plunger:
                         pull[env] = min(pull[env] + rules.pull_step, rules.stroke)

@@ -87,8 +87,8 @@ class GameState(NamedTuple):
     rule_events: np.ndarray  # (N, R + 2) int64: rules fired in the last step (RuleSet.event_names)
     lights_were_on: np.ndarray  # (N, R) bool: a lights_on rule's lights were all lit
     flippers_before: np.ndarray  # (N, F) bool: the flipper commands of the last frame
-    # Sticky actions (repeat_action_probability): the flipper commands and cabinet buttons the
-    # last frame pressed, which the next one may press again.
+    # The flipper commands and cabinet buttons the last frame pressed (with sticky actions,
+    # repeat_action_probability, the next frame may press them again).
     pressed: np.ndarray  # (N, F + 4) bool
 
 
