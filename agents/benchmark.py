@@ -59,10 +59,11 @@ import numpy as np
 
 from agents.config import ConfigError, TrainConfig, config_from_dict, load_config, load_run_config
 from agents.report import PROTOCOL_EVAL, evaluate
-from agents.runs import MODEL_FILE, progress_rows, source_commit
+from agents.runs import MODEL_FILE, latest_checkpoint, progress_rows, source_commit
 from pinball_env import protocol
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs" / "agents"
+COMMIT_VARIABLE = "PINBALL_SOURCE_COMMIT"  # a cluster node's commit: the driver's (agents.runs)
 JOB_FILE = "job.json"  # in OUT/METHOD/seedS: where and how long the job trained and evaluated
 SUMMARY = "summary.json"
 
@@ -148,20 +149,43 @@ def job_run(
     if not runs:
         return None
     expected = config or job_config(name, seed, settings)
-    if load_run_config(runs[0]).to_dict() != expected.to_dict():
+    found, wanted = _flat(load_run_config(runs[0]).to_dict()), _flat(expected.to_dict())
+    differ = sorted(
+        key for key in found.keys() | wanted.keys() if found.get(key) != wanted.get(key)
+    )
+    if differ:
         raise ConfigError(
             f"{runs[0]}: trained with another config than {name} seed {seed} under the protocol "
-            "(delete it, or give another --out)"
+            f"({', '.join(f'{key}: {found.get(key)!r}, not {wanted.get(key)!r}' for key in differ)}"
+            "; delete it, or give another --out)"
         )
     return runs[0]
 
 
+def _flat(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """A nested config as ``{"env.kwargs.frame_skip": 1, ...}``."""
+    flat = {}
+    for key, value in data.items():
+        if isinstance(value, dict) and value:
+            flat.update(_flat(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
 def job_done(name: str, seed: int, settings: Settings, config: TrainConfig | None = None) -> bool:
-    """The job's evaluation is written (and so its training finished)."""
-    if not METHODS[name].trained:
-        return (job_folder(settings, name, seed) / PROTOCOL_EVAL / SUMMARY).is_file()
-    run = job_run(name, seed, settings, config)
-    return run is not None and (run / PROTOCOL_EVAL / SUMMARY).is_file()
+    """The job's evaluation of this benchmark's games is written (so its training finished)."""
+    if METHODS[name].trained:
+        run = job_run(name, seed, settings, config)
+        if run is None or not (run / MODEL_FILE).is_file():
+            return False
+        summary = run / PROTOCOL_EVAL / SUMMARY
+    else:
+        summary = job_folder(settings, name, seed) / PROTOCOL_EVAL / SUMMARY
+    if not summary.is_file():
+        return False
+    first = protocol.EVAL_SEEDS.start
+    return json.loads(summary.read_text())["seeds"] == [first, first + settings.episodes - 1]
 
 
 def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None = None) -> Path:
@@ -183,6 +207,9 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
     from agents.train import start, train
 
     run = job_run(name, seed, settings, config)
+    if run is not None and latest_checkpoint(run) is None:  # stopped before its first: anew
+        shutil.rmtree(run)
+        run = None
     if run is None or not (run / MODEL_FILE).is_file():
         resume = run is not None
         if run is None:
@@ -246,33 +273,48 @@ def pack(folder: Path) -> bytes:
 
 
 def unpack(data: bytes, folder: Path) -> None:
-    """:func:`pack`'s bytes into ``folder`` (replacing what it held)."""
-    if folder.exists():
-        shutil.rmtree(folder)
-    folder.mkdir(parents=True)
-    with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as archive:
-        archive.extractall(folder, filter="data")
+    """:func:`pack`'s bytes into ``folder``, replacing what it held once they are unpacked
+    whole (nothing changes if they are not)."""
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=folder.parent) as scratch:
+        unpacked = Path(scratch) / folder.name
+        with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as archive:
+            # (the "data" filter refuses links and paths out of the folder; Python >= 3.10.12)
+            safe = {"filter": "data"} if hasattr(tarfile, "data_filter") else {}
+            archive.extractall(unpacked, **safe)
+        if folder.exists():
+            shutil.rmtree(folder)
+        os.replace(unpacked, folder)
 
 
 def remote_job(
-    name: str, seed: int, settings: Settings, config: dict[str, Any] | None, partial: bytes
-) -> tuple[bytes, str]:
+    name: str, seed: int, settings: Settings, config: dict[str, Any] | None, partial: bytes,
+    commit: str | None,
+) -> tuple[bytes, str, str | None]:  # fmt: skip
     """A job on a cluster node: in a scratch folder, from ``partial`` (the folder as the driver
-    has it), run with ``config`` (the driver's, as data); returns the folder and the node's
-    id."""
+    has it), run with ``config`` (the driver's, as data; the node has no configs/ and no git,
+    so the driver's ``commit`` is recorded). Returns the folder (as far as it got, also when the
+    job failed), the node's id and the error, if any."""
     import ray
 
+    if commit:
+        os.environ[COMMIT_VARIABLE] = commit
+    node = ray.get_runtime_context().get_node_id()
     with tempfile.TemporaryDirectory() as scratch:
         here = dataclasses.replace(settings, out=Path(scratch))
         folder = job_folder(here, name, seed)
         if partial:
             unpack(partial, folder)
-        run_job(name, seed, here, None if config is None else config_from_dict(config))
-        return pack(folder), ray.get_runtime_context().get_node_id()
+        try:
+            run_job(name, seed, here, None if config is None else config_from_dict(config))
+        except Exception as error:  # the folder comes back all the same: a rerun goes on
+            return pack(folder), node, f"{type(error).__name__}: {error}"
+        return pack(folder), node, None
 
 
 def run_on_cluster(jobs: list[tuple[str, int]], settings: Settings, address: str) -> None:
-    """Each job as a Ray task on the cluster at ``address``, its folder gathered into OUT."""
+    """Each job as a Ray task on the cluster at ``address``, its folder gathered into OUT; a
+    job that fails is reported (its folder kept, to go on from) after the others are in."""
     import ray
 
     from agents.rllib import init_ray
@@ -285,18 +327,28 @@ def run_on_cluster(jobs: list[tuple[str, int]], settings: Settings, address: str
         folder = job_folder(settings, name, seed)
         cpus = float(max(config.torch_threads, config.env_threads)) if config else 1.0
         sent = task.options(num_cpus=cpus).remote(
-            name, seed, settings, config and config.to_dict(), pack(folder)
+            name, seed, settings, config and config.to_dict(), pack(folder), source_commit()
         )
         pending[sent] = (name, seed)
     print(f"{len(pending)} jobs sent to the cluster at {address}")
+    failed = []
     while pending:
         ready, _ = ray.wait(list(pending))
         name, seed = pending.pop(ready[0])
-        data, node = ray.get(ready[0])
+        try:
+            data, node, error = ray.get(ready[0])
+        except ray.exceptions.RayError as lost:  # the task or its node died
+            failed.append(f"{name} seed {seed}: {lost}")
+            continue
         folder = job_folder(settings, name, seed)
-        unpack(data, folder)
-        _log_job(folder, node=node)
-        print(f"{name} seed {seed}: done on node {node}")
+        if data:
+            unpack(data, folder)
+            _log_job(folder, node=node)
+        if error is not None:
+            failed.append(f"{name} seed {seed} (node {node}): {error}")
+        print(f"{name} seed {seed}: {'failed' if error else 'done'} on node {node}")
+    if failed:
+        raise ConfigError(f"{len(failed)} job(s) failed (run again to go on): {'; '.join(failed)}")
 
 
 # --- the table ----------------------------------------------------------------------------------
@@ -495,13 +547,24 @@ def ship(name: str, seeds: list[int], settings: Settings) -> Path:
     from agents.policy import PRETRAINED_DIR
     from agents.runs import best_validation, validation_rows
 
+    if settings.tiny:
+        raise ConfigError("--ship ships agents trained under the protocol, not --tiny ones")
     result = method_results(name, seeds, settings)
     if result is None or not METHODS[name].trained:
         raise ConfigError(f"{name}: no finished training run to ship in {settings.out}")
+    short = [run["seed"] for run in result["runs"] if run["frames"] < 0.99 * settings.frames]
+    if short or len(result["runs"]) < len(protocol.TRAINING_SEEDS):
+        raise ConfigError(
+            f"{name}: ships the best of at least {len(protocol.TRAINING_SEEDS)} runs trained for "
+            f"the protocol's frames; {len(result['runs'])} are done"
+            + (f", seeds {short} stopped short" if short else "")
+        )
 
-    def validation(run: dict[str, Any]) -> float:
+    def validation(run: dict[str, Any]) -> float:  # (never the held-out games)
         best = best_validation(validation_rows(settings.out / run["run"]))
-        return best["score_mean"] if best else run["score_mean"]
+        if best is None:
+            raise ConfigError(f"{run['run']}: no validation games to choose the agent by")
+        return best["score_mean"]
 
     chosen = max(result["runs"], key=validation)
     run = settings.out / chosen["run"]
@@ -571,6 +634,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
             name, _, seed = args.job.partition(":")
             run_job(name, int(seed), settings)
             return None
+        args.methods, args.seeds = list(dict.fromkeys(args.methods)), sorted(set(args.seeds))
         jobs = [(name, seed) for name in args.methods
                 for seed in (args.seeds if METHODS[name].trained else [0])]  # fmt: skip
         todo = [job for job in jobs if not job_done(*job, settings)]

@@ -76,6 +76,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--curve", action="store_true", help="draw a run's learning curve")
     parser.add_argument("--watch", action="store_true", help="show the games in a window")
     args = parser.parse_args(argv)
+    if args.recording is not None:
+        given = [flag for flag, value in (("--protocol", args.protocol), ("--env", args.env),
+                 ("--table", args.table), ("--seed", args.seed), ("--video", args.video),
+                 ("--curve", args.curve), ("--watch", args.watch)) if value]  # fmt: skip
+        if given:
+            parser.error(f"--recording scores the recorded games on the protocol: no {given[0]}")
     try:
         if args.recording is not None:
             return score_recording(args.recording, args.out)

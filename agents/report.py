@@ -75,21 +75,24 @@ def evaluate(
             kwargs = {"kwargs": {"table": table} if table else {}}
             like = config_from_dict({"env": {**kwargs, **({"id": env} if env else {})}})
         player = baseline_player(policy, like)
-        out = out or Path("evals") / policy
+        default = Path("evals") / policy
     elif str(model_path).startswith(PRETRAINED_PREFIX):
         player = trained_player(resolve_model_path(model_path))
-        out = out or Path("evals") / str(model_path).replace(":", "-")
+        default = Path("evals") / str(model_path).replace(":", "-")
     else:
         player = trained_player(model_path)
-        out = out or (model_path if model_path.is_dir() else model_path.parent) / "eval"
+        default = (model_path if model_path.is_dir() else model_path.parent) / "eval"
     if protocol:
         if table is not None or seed is not None or episodes > len(EVAL_SEEDS):
             raise ConfigError(
-                f"the protocol plays its own games: no table or seed, at most {len(EVAL_SEEDS)}"
+                "the protocol plays its own games: no --table or --seed, and --episodes at most "
+                f"{len(EVAL_SEEDS)} (its held-out games)"
             )
         player = dataclasses.replace(player, config=protocol_config(player.config))
         seed = EVAL_SEEDS.start
-        out = out.parent / PROTOCOL_EVAL if out.name == "eval" else out
+        default = default.with_name(PROTOCOL_EVAL if default.name == "eval" else
+                                    f"{default.name}-protocol")  # fmt: skip
+    out = out or default
     first = player.config.eval_seed if seed is None else seed
     if player.trained:
         check_evaluation_seeds(player.config, first, episodes)
@@ -125,13 +128,20 @@ def score_recording(path: Path, out: Path | None = None) -> dict[str, Any]:
     try:
         recording = load_recording(path)
         check_recording(recording)
-        scores = replay(recording)
+        scores = replay(recording)  # (every game checked, the unfinished ones too)
     except RecordingError as error:
         raise ConfigError(str(error)) from None
     env_id = recording.env_id
+    # A restarted or quit game is not a game's score: only those played to their end count.
+    games = [(game.seed, score) for game, score in zip(recording.games, scores, strict=True)
+             if game.end in ("game over", "time limit")]  # fmt: skip
+    if not games:
+        raise ConfigError(f"{path}: no game was played to its end (game over or time limit)")
+    scores = [score for _, score in games]
     summary = {
         "policy": f"human ({path})",
-        "seeds": [game.seed for game in recording.games],
+        "seeds": [seed for seed, _ in games],
+        "unfinished": len(recording.games) - len(games),
         "scores": scores,
         "protocol": {"env_id": env_id, **aggregate([scores], env_id)},
     }
@@ -140,7 +150,7 @@ def score_recording(path: Path, out: Path | None = None) -> dict[str, Any]:
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     metrics = summary["protocol"]
     print(
-        f"{path}: {len(scores)} games of {env_id} on the protocol, all replayed as recorded: "
+        f"{path}: {len(scores)} whole games of {env_id} on the protocol, replayed as recorded: "
         f"score {metrics['score_mean']:.0f} (IQM {metrics['score_iqm']:.0f}), normalised "
         f"{metrics['normalized_mean']:.2f} (random 0, heuristic 1) -> {out}"
     )

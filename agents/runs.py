@@ -168,9 +168,12 @@ def start_run(config: AnyConfig, runs: Path, command: list[str], libraries: list
 
 def source_commit() -> str | None:
     """The git commit of the checkout this code runs from (a ``+`` marks uncommitted changes),
-    or None outside a checkout."""
+    or None outside a checkout; ``PINBALL_SOURCE_COMMIT`` where it is set (a Ray node running
+    code shipped from a checkout, see ``agents.benchmark``)."""
     import subprocess
 
+    if os.environ.get("PINBALL_SOURCE_COMMIT"):
+        return os.environ["PINBALL_SOURCE_COMMIT"]
     root = Path(__file__).resolve().parent.parent
 
     def git(*args: str) -> str:

@@ -15,8 +15,10 @@ As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggre
   (at least 5 per method); training never plays a held-out game.
 - **Evaluation**: every run plays the :data:`EVAL_SEEDS` games (held out: seeds 100000-100099),
   its policy deterministic.
-- **Metrics**: the mean and the interquartile mean (IQM) of the score, each with a 95%
-  stratified bootstrap interval over the runs (:func:`bootstrap_interval`), a performance
+- **Metrics**: the mean and the interquartile mean (IQM) of the score (of all games of all runs
+  pooled), each with a 95% bootstrap interval over seeds and games (:func:`bootstrap_interval`:
+  two levels, the seeds drawn, then each drawn seed's games; a method without training seeds
+  is one run, its interval the games' alone), a performance
   profile (:func:`performance_profile`), and every game's score normalised by random play (0)
   and the heuristic (1) (:func:`normalized`, from :data:`REFERENCE_SCORES`), and by a human
   score where one is recorded (:data:`HUMAN_SCORES`; ``python -m agents.evaluate --recording
@@ -39,9 +41,10 @@ REPEAT_ACTION_PROBABILITY = 0.25
 # env id's), 3 balls, two minutes (7200 frames at 60 Hz), the swept physics. An agent's config
 # may not change these.
 GAME_OPTIONS: dict[str, Any] = {"balls": 3, "max_frames": 7200, "physics": "swept"}
-# Env options that change the game rather than the agent's view of it (see check_agent_options);
-# the sticky actions are the protocol's whatever an agent trained with.
-FIXED_OPTIONS = ("table", "balls", "max_frames", "physics")
+# Env options that change the game rather than the agent's view of it (see check_agent_options):
+# the game's (a step limit would cut it short; the time is max_frames'); the sticky actions are
+# the protocol's whatever an agent trained with.
+FIXED_OPTIONS = ("table", "balls", "max_frames", "physics", "max_episode_steps")
 # A training run's budget: frames summed over its envs, a warm start's included
 # (``total_frames`` of a training config). The shipped PPO trains this in about 28 minutes on a
 # 2-core machine (configs/agents/ppo_v1.yaml: 20.5M frames in 28 minutes).
@@ -97,7 +100,11 @@ def check_agent_options(
         raise ValueError(f"{env_id!r} is not an env of the protocol ({', '.join(ENV_IDS)})")
     import gymnasium as gym
 
-    game = {**GAME_OPTIONS, "table": gym.spec(env_id).kwargs.get("table", "classic")}
+    game = {
+        **GAME_OPTIONS,
+        "table": gym.spec(env_id).kwargs.get("table", "classic"),
+        "max_episode_steps": None,
+    }
     changed = [
         f"{key}={options[key]!r}"
         for key in FIXED_OPTIONS
@@ -141,10 +148,12 @@ def bootstrap_interval(
     seed: int = BOOTSTRAP_SEED,
 ) -> tuple[float, float]:
     """The ``confidence`` percentile interval of ``statistic`` (of all scores pooled) by a
-    stratified bootstrap: each of ``samples`` replicates draws the runs (training seeds) with
-    replacement and, within each run drawn (its stratum), its games with replacement, so that
-    the interval holds both the seeds' and the games' spread. ``runs``: one array of game
-    scores per run (a method without training seeds is one run)."""
+    two-level bootstrap stratified by seed: each of ``samples`` replicates draws the runs
+    (training seeds) with replacement and, within each run drawn (its stratum), as many of its
+    games with replacement, so that the interval holds both the seeds' and the games' spread
+    (rliable resamples runs within each task; here the games of one env are the draws of its
+    task). ``runs``: one array of game scores per run (a method without training seeds is one
+    run: its interval is the games' alone)."""
     runs = [np.asarray(run, dtype=np.float64).ravel() for run in runs]
     if not runs or any(len(run) == 0 for run in runs):
         raise ValueError("bootstrap_interval needs at least one run, each with games")

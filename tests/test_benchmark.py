@@ -3,6 +3,7 @@ protocol."""
 
 import csv
 import json
+import shutil
 from pathlib import Path
 
 import gymnasium as gym
@@ -73,17 +74,39 @@ def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
     first = out / table["methods"]["ppo-v0"]["runs"][0]["run"] / MODEL_FILE
     assert first.stat().st_mtime_ns == first_model.st_mtime_ns
     assert again["methods"]["ppo-v0"]["runs"][0] == table["methods"]["ppo-v0"]["runs"][0]
+    # Fewer games: the evaluations are played again, the training is not.
+    fewer = benchmark.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0",
+                            "--episodes", "2"])  # fmt: skip
+    assert fewer["methods"]["ppo-v0"]["games"] == 2
+    assert first.stat().st_mtime_ns == first_model.st_mtime_ns
+
+
+def test_a_run_stopped_before_its_first_checkpoint_starts_again(tiny):
+    out, _ = tiny
+    settings = benchmark.Settings(out, episodes=2, tiny=True)
+    run = benchmark.job_run("ppo-v0", 0, settings)
+    shutil.rmtree(run / "checkpoints")  # as if killed in its warm start
+    (run / MODEL_FILE).unlink()
+    benchmark.run_job("ppo-v0", 0, settings)
+    again = benchmark.job_run("ppo-v0", 0, settings)
+    assert (again / MODEL_FILE).is_file() and not (again / "progress_0.csv").exists()
+
+
+def test_tiny_runs_do_not_ship():
+    with pytest.raises(SystemExit):
+        benchmark.main(["--tiny", "--out", "/nonexistent", "--methods", "ppo-v0", "--table-only",
+                        "--ship", "ppo-v0"])  # fmt: skip
 
 
 def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
-    out, table = tiny
-    run = out / table["methods"]["ppo-v0"]["runs"][0]["run"]
+    out, _ = tiny
+    run = benchmark.job_run("ppo-v0", 0, benchmark.Settings(out, tiny=True))
     copy = tmp_path / "ppo-v0" / "seed0" / run.name
     copy.mkdir(parents=True)
     text = (run / "config.yaml").read_text().replace("total_frames: 3000", "total_frames: 4000")
     (copy / "config.yaml").write_text(text)
     settings = benchmark.Settings(tmp_path, tiny=True)
-    with pytest.raises(ConfigError, match="trained with another config than ppo-v0 seed 0"):
+    with pytest.raises(ConfigError, match=r"than ppo-v0 seed 0 .*total_frames: 4000"):
         benchmark.job_run("ppo-v0", 0, settings)
 
 

@@ -29,6 +29,7 @@ def test_the_protocol_envs_take_its_options():
         ("Pinball-v1", {"table": "classic"}, "table='classic'"),
         ("Pinball-v0", {"max_frames": 100}, "max_frames=100"),
         ("Pinball-v0", {"physics": "pymunk"}, "physics='pymunk'"),
+        ("Pinball-v0", {"max_episode_steps": 500}, "max_episode_steps=500"),
         ("PinballProcgen-v0", {}, "not an env of the protocol"),
     ],
 )
@@ -52,7 +53,7 @@ def test_iqm_is_the_mean_of_the_middle_half():
 
 @given(st.lists(scores_lists, min_size=1, max_size=5))
 @settings(max_examples=40, deadline=None)
-def test_bootstrap_intervals_hold_the_pooled_statistic(runs):
+def test_bootstrap_intervals_lie_within_the_scores_and_repeat(runs):
     pooled = np.concatenate([np.asarray(run, dtype=float) for run in runs])
     for statistic in (np.mean, protocol.iqm):
         low, high = protocol.bootstrap_interval(runs, statistic, samples=300)

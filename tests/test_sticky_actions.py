@@ -11,20 +11,24 @@ import pinball_env  # noqa: F401  (registers the envs)
 
 
 def expected_presses(
-    pressed: np.ndarray, buttons: np.ndarray, draws: np.ndarray, p: float, frames: int
+    pressed: np.ndarray, buttons: np.ndarray, draws: np.ndarray, p: float, frames: int, skip: int
 ) -> np.ndarray:
     """The buttons the last of ``frames`` frames presses: each frame takes the action's
-    ``buttons`` unless its draw is below ``p``, then it keeps the frame before's."""
+    ``buttons`` (released after the first ``skip`` frames) unless its draw is below ``p``, then
+    it keeps the frame before's."""
     for frame in range(frames):
         if not draws[frame] < p:
-            pressed = buttons
+            pressed = buttons if frame < skip else np.zeros_like(buttons)
     return pressed
 
 
-@pytest.mark.parametrize("env_id", ["Pinball-v0", "Pinball-v1"])
-def test_each_frame_repeats_the_last_buttons_where_its_draw_says(env_id):
+@pytest.mark.parametrize(
+    ("env_id", "skip_above"), [("Pinball-v0", 0.0), ("Pinball-v1", 0.0), ("Pinball-v1", 0.4)]
+)
+def test_each_frame_repeats_the_last_buttons_where_its_draw_says(env_id, skip_above):
     p, skip = 0.4, 3
-    env = gym.make(env_id, repeat_action_probability=p, frame_skip=skip, balls=1)
+    env = gym.make(env_id, repeat_action_probability=p, frame_skip=skip, balls=1,
+                   skip_above=skip_above)  # fmt: skip
     game = env.unwrapped.game
     env.reset(seed=5)
     rng = np.random.default_rng(0)
@@ -34,7 +38,7 @@ def test_each_frame_repeats_the_last_buttons_where_its_draw_says(env_id):
     for _ in range(400):
         action = int(rng.integers(env.action_space.n))
         stream = copy.deepcopy(env.unwrapped.np_random)
-        draws = stream.random(skip)  # the step's draws come first, before any launch's
+        draws = stream.random(skip + (60 if skip_above else 0))  # first, before a launch's
         buttons = game.discrete_buttons[action]
         commands = buttons[game.world.flipper_buttons]
         wanted = np.concatenate([commands, buttons[2:] if cabinet else np.zeros(4, bool)])
@@ -42,7 +46,7 @@ def test_each_frame_repeats_the_last_buttons_where_its_draw_says(env_id):
         frames_before = game.state.frames[0]
         _, _, terminated, truncated, _ = env.step(action)
         played = game.state.frames[0] - frames_before
-        expected = expected_presses(before, wanted, draws, p, played)
+        expected = expected_presses(before, wanted, draws, p, played, skip)
         assert np.array_equal(game.state.pressed[0], expected)
         flippers = game.state.pressed[0, :n_flippers] & ~game.world.state.tilted[0]
         assert np.array_equal(game.world.state.flipper_command[0], flippers)
