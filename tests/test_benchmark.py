@@ -9,6 +9,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import yaml
 
 from agents import benchmark
 from agents.config import ConfigError
@@ -108,6 +109,11 @@ def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
     settings = benchmark.Settings(tmp_path, tiny=True)
     with pytest.raises(ConfigError, match=r"than ppo-v0 seed 0 .*total_frames: 4000"):
         benchmark.job_run("ppo-v0", 0, settings)
+    # Its notes reworded since: the same training.
+    data = yaml.safe_load((run / "config.yaml").read_text())
+    data["notes"] = f"Reworded. {data['notes']}"
+    (copy / "config.yaml").write_text(yaml.safe_dump(data))
+    assert benchmark.job_run("ppo-v0", 0, settings) == copy
 
 
 def protocol_recording(path: Path, options: dict, seeds: list[int]) -> list[int]:
