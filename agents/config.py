@@ -119,6 +119,9 @@ class TrainConfig(_RunConfig):
     They count in ``max_minutes``, not in ``total_timesteps``."""
     imitation_epochs: int = 5
     """Passes over the heuristic's steps in the warm start."""
+    imitation_learning_rate: float | None = None
+    """The warm start's learning rate (None: the algorithm's first learning rate), so that a
+    gentle fine-tuning rate does not also weaken the fit."""
     validate_every: int = 0
     """Every this many env steps, and at the end (0: never), the model plays
     ``validate_episodes`` whole games from ``validate_seed`` on, deterministically; the best of
@@ -394,10 +397,17 @@ def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
 
 
 def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
-    """The warm start: a count of steps and epochs, for an actor-critic on state observations
-    with discrete actions (the heuristic's)."""
+    """The warm start: a count of steps and epochs and a learning rate, for an actor-critic on
+    state observations with discrete actions (the heuristic's)."""
     for key, low in (("imitation_steps", 0), ("imitation_epochs", 1)):
         _check_integer(fail, key, getattr(config, key), low)
+    rate = config.imitation_learning_rate
+    if rate is not None and (
+        isinstance(rate, bool)
+        or not isinstance(rate, (int, float))
+        or not (math.isfinite(rate) and rate > 0)
+    ):
+        fail("imitation_learning_rate", f"must be a positive number or null, not {rate!r}")
     if not config.imitation_steps:
         return
     if config.algo not in ("ppo", "a2c"):

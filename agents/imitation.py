@@ -5,9 +5,9 @@ With ``imitation_steps`` > 0 in a config, before it learns, the heuristic
 (summed over the envs), through the training env chain, so that ``VecNormalize``'s statistics
 start from its games. The policy is then fitted to the heuristic's actions (cross-entropy) and
 the value to the discounted returns of its games (mean squared error, the rewards normalised
-as the algorithm will see them), ``imitation_epochs`` passes in minibatches. Learning goes on
-from there. The teacher's steps count in ``max_minutes`` and in ``time/frames``, not in
-``total_timesteps``.
+as the algorithm will see them), ``imitation_epochs`` passes in minibatches at
+``imitation_learning_rate``. Learning goes on from there. The teacher's steps count in
+``max_minutes`` and in ``time/frames``, not in ``total_timesteps``.
 
 The heuristic is the bar the agent has to beat: copying it is where learning starts, not
 the result; the evaluation plays the learned policy alone.
@@ -73,11 +73,13 @@ def discounted_returns(rewards: np.ndarray, dones: np.ndarray, gamma: float) -> 
 
 
 def imitate(
-    model: Any, venv: Any, steps: int, epochs: int, seed: int, stop: Any = False
-) -> dict[str, float]:
+    model: Any, venv: Any, steps: int, epochs: int, seed: int, stop: Any = False,
+    learning_rate: float | None = None,
+) -> dict[str, float]:  # fmt: skip
     """Play ``steps`` env steps of the heuristic in ``venv`` and fit ``model``'s policy and value
-    to them (see the module's docstring); returns the fit's figures. Once ``stop`` (a
-    ``StopRequest``) is true, the games and the fit end early: the model keeps what it fitted."""
+    to them (see the module's docstring), at ``learning_rate`` (None: the rate its optimizer
+    has); returns the fit's figures. Once ``stop`` (a ``StopRequest``) is true, the games and
+    the fit end early: the model keeps what it fitted."""
     import torch
 
     start = time.monotonic()
@@ -98,6 +100,10 @@ def imitate(
     returns_t = torch.as_tensor(returns, dtype=torch.float32, device=device)
     rng = np.random.default_rng(seed)
     vf_coef = getattr(model, "vf_coef", 0.5)
+    rates = [group["lr"] for group in policy.optimizer.param_groups]
+    if learning_rate is not None:  # (the algorithm sets its own rate again as it learns)
+        for group in policy.optimizer.param_groups:
+            group["lr"] = learning_rate
     for _ in range(epochs):
         order = rng.permutation(len(actions))
         for first in range(0, len(order), BATCH_SIZE):
@@ -111,6 +117,8 @@ def imitate(
             loss.backward()
             torch.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
             policy.optimizer.step()
+    for group, rate in zip(policy.optimizer.param_groups, rates, strict=True):
+        group["lr"] = rate
     policy.set_training_mode(False)
     with torch.no_grad():
         chosen = policy.get_distribution(obs_t).distribution.probs.argmax(dim=1)

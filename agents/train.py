@@ -287,7 +287,8 @@ def record_trained(run: Path, steps: int, frames: int) -> None:
 def warm_start(model: Any, venv: Any, config: TrainConfig, stop: StopRequest) -> int:
     """The heuristic's games and the fit to them (``agents.imitation``), logged under
     ``imitation/``; returns the frames they played."""
-    fit = imitate(model, venv, config.imitation_steps, config.imitation_epochs, config.seed, stop)
+    fit = imitate(model, venv, config.imitation_steps, config.imitation_epochs, config.seed, stop,
+                  config.imitation_learning_rate)  # fmt: skip
     print(
         f"warm start: the heuristic played {fit['steps']} steps ({fit['frames']} frames); "
         f"the policy now takes its action {fit['accuracy']:.1%} of the time "

@@ -241,6 +241,7 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["hyperparams.clip_range=lin_-0.2"], "clip_range: a schedule is lin_X with X > 0"),
         (["imitation_steps=-5"], "imitation_steps: must be an integer >= 0"),
         (["imitation_epochs=0"], "imitation_epochs: must be an integer >= 1"),
+        (["imitation_learning_rate=-1e-3"], "imitation_learning_rate: must be a positive number"),
         (["imitation_steps=100", "algo=dqn", "hyperparams={}"], "needs an actor-critic"),
         (["imitation_steps=100", "env.kwargs.action_type=multibinary"], "needs discrete actions"),
         (["imitation_steps=100", "env.frame_stack=2"], "needs state observations"),
@@ -433,6 +434,22 @@ def test_the_warm_start_fits_the_heuristic_and_counts_in_the_budget(tmp_path):
         row = next(csv.DictReader(file))
     assert float(row["imitation/steps"]) == 512 and float(row["imitation/accuracy"]) > 0.5
     assert int(float(row["time/frames"])) > int(float(row["imitation/frames"]))
+
+
+def test_the_warm_start_fits_at_its_own_learning_rate():
+    from stable_baselines3 import PPO
+
+    config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])  # (512 a batch)
+    moves = []
+    for learning_rate in (None, 1e-30):  # the algorithm's 3e-4, and a rate that moves nothing
+        venv = make_env(config)
+        model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
+        before = [p.detach().clone() for p in model.policy.parameters()]
+        imitate(model, venv, steps=256, epochs=1, seed=0, learning_rate=learning_rate)
+        after = [p.detach() for p in model.policy.parameters()]
+        moves.append(max(float((p - q).abs().max()) for p, q in zip(after, before, strict=True)))
+        assert model.policy.optimizer.param_groups[0]["lr"] == pytest.approx(3e-4)  # restored
+    assert moves[0] > 1e-4 and moves[1] < 1e-20
 
 
 def start_training(
