@@ -206,9 +206,19 @@ AnyConfig = TrainConfig | RllibConfig
 def load_config(
     path: str | os.PathLike[str], overrides: list[str] = (), kind: type = TrainConfig
 ) -> AnyConfig:
-    """The config (a ``kind``) in the YAML file ``path`` with ``key=value`` overrides applied,
-    checked."""
+    """The config (a ``kind``) in the YAML file ``path`` over its ``base`` config if it names
+    one, with ``key=value`` overrides applied, checked."""
     path = Path(path)
+    data = _read_config_data(path)
+    for item in overrides:
+        apply_override(data, item, path)
+    return config_from_dict(data, str(path), kind)
+
+
+def _read_config_data(path: Path, inside: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The mapping in the YAML file ``path`` laid over the config its ``base`` key names (a path
+    from ``path``'s folder), and so on down: a mapping merges key by key, any other value
+    replaces the base's. ``inside``: the files that named this one as their base."""
     try:
         text = path.read_text()
     except OSError as error:
@@ -219,9 +229,26 @@ def load_config(
         raise ConfigError(f"{path}: not valid YAML: {error}") from None
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: a config is a mapping of keys, got {type(data).__name__}")
-    for item in overrides:
-        apply_override(data, item, path)
-    return config_from_dict(data, str(path), kind)
+    if "base" not in data:
+        return data
+    base = data.pop("base")
+    if not isinstance(base, str) or not base:
+        raise ConfigError(f"{path}: base: must be the path of a config file, got {base!r}")
+    chain = (*inside, path.resolve())
+    base_path = path.parent / base
+    if base_path.resolve() in chain:
+        files = " -> ".join(str(file) for file in (*chain, base_path.resolve()))
+        raise ConfigError(f"{path}: base: {base} makes a cycle ({files})")
+    return _merged(_read_config_data(base_path, chain), data)
+
+
+def _merged(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """``base`` with ``over``'s keys: mappings in both merged in turn, other values replaced."""
+    merged = dict(base)
+    for key, value in over.items():
+        both = isinstance(value, dict) and isinstance(merged.get(key), dict)
+        merged[key] = _merged(merged[key], value) if both else value
+    return merged
 
 
 def apply_override(data: dict[str, Any], item: str, source: str | Path = "override") -> None:
@@ -402,11 +429,7 @@ def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> N
     for key, low in (("imitation_steps", 0), ("imitation_epochs", 1)):
         _check_integer(fail, key, getattr(config, key), low)
     rate = config.imitation_learning_rate
-    if rate is not None and (
-        isinstance(rate, bool)
-        or not isinstance(rate, (int, float))
-        or not (math.isfinite(rate) and rate > 0)
-    ):
+    if rate is not None and not _positive(rate):
         fail("imitation_learning_rate", f"must be a positive number or null, not {rate!r}")
     if not config.imitation_steps:
         return
@@ -504,7 +527,17 @@ def linear_start(text: str) -> float | None:
         start = float(text.removeprefix("lin_"))
     except ValueError:
         return None
-    return start if math.isfinite(start) and start > 0 else None
+    return start if _positive(start) else None
+
+
+def _positive(value: Any) -> bool:
+    """A finite number > 0 (a bool is not a number here)."""
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, (int, float))
+        and math.isfinite(value)
+        and value > 0
+    )
 
 
 def sb3_hyperparams(config: TrainConfig) -> dict[str, Any]:

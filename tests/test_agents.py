@@ -2,6 +2,7 @@
 checkpoints, config errors, deterministic evaluation, and rl-zoo3's hyperparameters."""
 
 import csv
+import dataclasses
 import json
 import subprocess
 import sys
@@ -32,10 +33,10 @@ TINY = {
 
 
 def tiny_overrides(config: Path) -> list[str]:
-    data = yaml.safe_load(config.read_text())
-    warm = ["imitation_steps=64"] if data.get("imitation_steps") else []
-    validation = ["validate_episodes=2"] if data.get("validate_every") else []
-    return ["total_timesteps=256", "env.num_envs=2", "checkpoint_every=128", *TINY[data["algo"]],
+    loaded = load_config(config)  # (over its base, if it has one)
+    warm = ["imitation_steps=64"] if loaded.imitation_steps else []
+    validation = ["validate_episodes=2"] if loaded.validate_every else []
+    return ["total_timesteps=256", "env.num_envs=2", "checkpoint_every=128", *TINY[loaded.algo],
             *warm, *validation]  # fmt: skip
 
 
@@ -282,6 +283,56 @@ def test_bad_config_files_are_rejected(tmp_path, text, message):
         path.write_text(text)
     with pytest.raises(ConfigError, match=message):
         load_config(path)
+
+
+def test_a_config_is_laid_over_its_base(tmp_path):
+    """``base``: mappings merge key by key through the chain, other values replace the base's,
+    and the result is the config written out in full."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "mid.yaml").write_text(
+        f"base: {ROOT / 'configs/agents/ppo.yaml'}\n"
+        "total_timesteps: 5000\nenv: {kwargs: {drain_penalty: 9.0}}\n"
+    )
+    (tmp_path / "top.yaml").write_text(
+        "base: sub/mid.yaml\nhyperparams: {policy_kwargs: {net_arch: [8]}, gamma: 0.9}\n"
+    )
+    written_out = load_config(
+        ROOT / "configs/agents/ppo.yaml",
+        ["total_timesteps=5000", "env.kwargs.drain_penalty=9.0",
+         "hyperparams.policy_kwargs.net_arch=[8]", "hyperparams.gamma=0.9"],
+    )  # fmt: skip
+    assert load_config(tmp_path / "top.yaml") == written_out
+    assert written_out.env.kwargs["skip_above"] == 0.26  # a merged mapping keeps the base's keys
+
+
+def test_the_shipped_variants_are_their_base_and_their_changes():
+    sticky = load_config(CONFIGS_DIR / "ppo_sticky_v1.yaml")
+    changes = ["total_timesteps=9000000", "max_minutes=0", "total_frames=20000000",
+               "env.kwargs.repeat_action_probability=0.25",
+               "env.kwargs.drain_penalty=40.0"]  # fmt: skip
+    base = load_config(CONFIGS_DIR / "ppo_v1.yaml", changes)
+    assert sticky == dataclasses.replace(base, notes=sticky.notes)
+    wide = load_config(CONFIGS_DIR / "ppo_wide_v1.yaml")
+    changes = ["imitation_epochs=10", "hyperparams.policy_kwargs.net_arch=[256,256]"]
+    base = load_config(CONFIGS_DIR / "ppo_sticky_v1.yaml", changes)
+    assert wide == dataclasses.replace(base, notes=wide.notes)
+
+
+@pytest.mark.parametrize(
+    ("files", "message"),
+    [
+        ({"a.yaml": "base: 3"}, r"a\.yaml: base: must be the path of a config file, got 3"),
+        ({"a.yaml": "base: nothing.yaml"}, r"nothing\.yaml: cannot read the config"),
+        ({"a.yaml": "base: a.yaml"}, r"a\.yaml: base: a\.yaml makes a cycle"),
+        ({"a.yaml": "base: b.yaml", "b.yaml": "base: a.yaml"}, r"b\.yaml: base: a\.yaml makes"),
+        ({"a.yaml": "base: b.yaml", "b.yaml": "algo: ppo\nbogus: 1"}, "unknown key 'bogus'"),
+    ],
+)  # fmt: skip
+def test_a_bad_base_is_rejected_naming_the_file(tmp_path, files, message):
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config(tmp_path / "a.yaml")
 
 
 def test_the_command_line_fails_clearly_before_training(tmp_path, capsys):
