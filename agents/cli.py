@@ -10,9 +10,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from agents.config import AnyConfig, ConfigError, check_evaluation_seeds, load_config
+from agents.config import (
+    AnyConfig,
+    ConfigError,
+    TrainConfig,
+    check_evaluation_seeds,
+    load_config,
+)
 from agents.report import report
-from agents.runs import CONFIG_FILE, TrainingInterrupted, checkpoints_of, extend_run
+from agents.runs import CONFIG_FILE, MODEL_FILE, TrainingInterrupted, checkpoints_of, extend_run
 
 # train(config, run, resume, progress_bar, args) -> the final model's path
 Train = Callable[[AnyConfig, Path, bool, bool, argparse.Namespace], Path]
@@ -33,12 +39,15 @@ def training_parser(description: str, configs: str, overrides: str) -> argparse.
 
 
 def run_config(args: argparse.Namespace, kind: type, command: list[str]) -> AnyConfig:
-    """The config of the command: the resumed run's, extended by the overrides (refused before
-    anything is written when the run has no checkpoint), or ``--config``'s."""
+    """The config of the command: the resumed run's, extended by the overrides, or
+    ``--config``'s. A run without a checkpoint is refused before anything is written, but for a
+    stable-baselines3 run stopped before learning (no model either): it is trained again."""
     if args.resume is not None:
         if args.config is not None:
             raise ConfigError("--resume goes on with the run's own config: no --config")
-        if (args.resume / CONFIG_FILE).is_file() and not checkpoints_of(args.resume):
+        never_learned = kind is TrainConfig and not (args.resume / MODEL_FILE).exists()
+        run = (args.resume / CONFIG_FILE).is_file()
+        if run and not checkpoints_of(args.resume) and not never_learned:
             raise ConfigError(f"{args.resume}: no checkpoint to resume from")
         return extend_run(args.resume, args.overrides, kind, command)
     if args.config is None:

@@ -125,15 +125,25 @@ class ProgressBar:
 
 
 class TrainingInterrupted(Exception):
-    """A training stopped by a signal, after saving ``checkpoint``; the message says how to
-    resume it."""
+    """A training stopped by a signal, after saving ``checkpoint`` (None: stopped in its warm
+    start, which a checkpoint would cut short for good, so nothing is saved and the resume
+    starts the run again); the message says how to resume it."""
 
-    def __init__(self, run: Path, checkpoint: Path, steps: int, stop: StopRequest, module: str):
+    def __init__(
+        self, run: Path, checkpoint: Path | None, steps: int, stop: StopRequest, module: str
+    ):
         self.run, self.checkpoint, self.steps = run, checkpoint, steps
         self.exit_code = 128 + int(stop.signal or signal.SIGINT)
+        name = (stop.signal or signal.SIGINT).name
+        if checkpoint is None:
+            super().__init__(
+                f"{name}: stopped in the warm start, before learning: nothing saved\n"
+                f"resume with: python -m {module} --resume {run} (it starts the run again)"
+            )
+            return
         super().__init__(
-            f"{(stop.signal or signal.SIGINT).name}: stopped at {steps:,} steps; checkpoint "
-            f"{checkpoint}\nresume with: python -m {module} --resume {run}"
+            f"{name}: stopped at {steps:,} steps; checkpoint {checkpoint}\n"
+            f"resume with: python -m {module} --resume {run}"
         )
 
 

@@ -13,13 +13,14 @@ its last checkpoint with the same config; ``--resume RUN key=value ...`` extends
 others would change what was learned and are refused). Training stops at ``total_timesteps``,
 after ``max_minutes`` of wall time (the progress bar's remaining time counts to whichever comes
 first) or at ``total_frames`` frames played (the benchmark protocol's budget). SIGINT (Ctrl-C)
-or SIGTERM, warm start included, saves a checkpoint with the
-normalisation statistics and prints it and the resume command. With ``validate_every``, the
-model plays the validation games (``validate_seed`` on) every that many steps and at the end;
-the scores go to ``validation.csv``, the best model so far to ``best_model.zip``, and the best
-of all becomes ``model.zip`` (the last one stays in ``checkpoints/``). ``--report`` then
-evaluates the model against the random and heuristic baselines and writes the report into the
-run folder (see ``agents.report``).
+or SIGTERM saves a checkpoint with the normalisation statistics and prints it and the resume
+command; in the warm start it saves nothing (a checkpoint would skip the rest of the warm start
+for good), and a run without a checkpoint is trained again from the start when resumed. With
+``validate_every``, the model plays the validation games (``validate_seed`` on) every that many
+steps and at the end; the scores go to ``validation.csv``, the best model so far to
+``best_model.zip``, and the best of all becomes ``model.zip`` (the last one stays in
+``checkpoints/``). ``--report`` then evaluates the model against the random and heuristic
+baselines and writes the report into the run folder (see ``agents.report``).
 
 Models are pickles inside zips: load only models you trust.
 """
@@ -212,12 +213,19 @@ def _train(
     started = time.monotonic()
     set_threads(config)
     checkpoint = latest_checkpoint(run) if resume else None
-    if resume and checkpoint is None:
-        raise ConfigError(f"{run}: no checkpoint to resume from")
+    if resume and checkpoint is None:  # stopped before learning: nothing to go on from
+        if (run / MODEL_FILE).exists():
+            raise ConfigError(f"{run}: no checkpoint to resume from")
+        print(f"{run} has no checkpoint yet: training it again from the start")
+        clear_training_logs(run)
+        resume = False
     venv, model, frames = _model(config, run, checkpoint)
     model.set_logger(configure(str(run), ["csv", "tensorboard"]))
     if config.imitation_steps and checkpoint is None:
         frames = warm_start(model, venv, config, stop)
+        if stop:  # cut short: a checkpoint now would skip the rest of it on resume
+            venv.close()
+            raise TrainingInterrupted(run, None, 0, stop, "agents.train")
     validation = Validation(config, run) if config.validate_every else None
     callback = make_callback(config, run, frames, started, validation, stop, progress_bar)
     left = config.total_timesteps - model.num_timesteps
@@ -274,6 +282,14 @@ def _model(
     if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
         model.learning_starts += model.num_timesteps
     return venv, model, keep_progress(run)
+
+
+def clear_training_logs(run: Path) -> None:
+    """Remove what a training that left no checkpoint logged in ``run`` (its progress,
+    validation rows and best model, TensorBoard events), before it is trained again."""
+    logged = ["progress*.csv", VALIDATION_FILE, f"{BEST_MODEL}*", "events.out.tfevents.*"]
+    for path in [path for pattern in logged for path in run.glob(pattern)]:
+        path.unlink()
 
 
 def record_trained(run: Path, steps: int, frames: int) -> None:

@@ -556,20 +556,64 @@ def test_a_signal_saves_a_checkpoint_and_the_run_resumes_extended(
     _, err = process.communicate(timeout=120)
     assert process.returncode == 128 + getattr(signal, signal_name), err
     (run,) = runs.iterdir()
+    assert "Traceback" not in err
+    if warm_start:  # nothing saved (test_a_run_stopped_in_its_warm_start_is_trained_again)
+        assert latest_checkpoint(run) is None and "stopped in the warm start" in err
+        assert f"--resume {run} (it starts the run again)" in err
+        return
     steps, checkpoint = latest_checkpoint(run)
-    assert steps == 0 if warm_start else steps >= 128
+    assert steps >= 128
     assert f"checkpoint {checkpoint}" in err
     assert f"resume with: python -m agents.train --resume {run}" in err
     assert checkpoint.with_name(f"step_{steps}_vecnormalize.pkl").is_file()
     with zipfile.ZipFile(checkpoint) as archive:
         assert json.loads(archive.read(AGENT_ENTRY))["obs_normalization"]["var"]
-    assert "Traceback" not in err
     # The resume extends the run: a new budget, the same learning.
     train.main(["--resume", str(run), f"total_timesteps={steps + 256}", "--no-progress"])
     assert PPO.load(run / "model.zip").num_timesteps >= steps + 256
     assert load_config(run / "config.yaml").total_timesteps == steps + 256
     meta = json.loads((run / "meta.json").read_text())
     assert meta["resumes"][0]["overrides"] == [f"total_timesteps={steps + 256}"]
+
+
+def test_a_run_stopped_in_its_warm_start_is_trained_again(tmp_path, monkeypatch, capsys):
+    """A stop in the warm start saves no checkpoint (one would skip the rest of the warm start
+    for good); the resume trains the run from the start: the run never stopped, bit for bit."""
+    import pickle
+    import signal
+
+    import torch
+    from stable_baselines3 import PPO
+
+    from agents import imitation
+
+    config, overrides = ROOT / "configs/agents/ppo.yaml", ["imitation_steps=64"]
+    whole = tiny_run(config, tmp_path / "whole", *overrides)
+    fits = []
+
+    def stopped_in_the_fit(*args, **kwargs):
+        fits.append(imitation.imitate(*args, **kwargs))
+        if len(fits) == 1:
+            signal.raise_signal(signal.SIGINT)  # (StopRequest's: the stop turns true)
+        return fits[-1]
+
+    monkeypatch.setattr("agents.train.imitate", stopped_in_the_fit)
+    with pytest.raises(SystemExit) as exit_:
+        tiny_run(config, tmp_path / "runs", *overrides)
+    assert exit_.value.code == 128 + signal.SIGINT
+    (run,) = (tmp_path / "runs").iterdir()
+    assert latest_checkpoint(run) is None and not (run / "model.zip").exists()
+    assert "stopped in the warm start, before learning: nothing saved" in capsys.readouterr().err
+    train.main(["--resume", str(run), "--no-progress"])
+    assert len(fits) == 2 and "training it again from the start" in capsys.readouterr().out
+    trained, again = (PPO.load(path / "model.zip").policy.state_dict() for path in (whole, run))
+    assert all(torch.equal(trained[key], again[key]) for key in trained)
+    trained, again = (pickle.loads((path / "model_vecnormalize.pkl").read_bytes())
+                      for path in (whole, run))  # fmt: skip
+    for rms in ("obs_rms", "ret_rms"):
+        for moment in ("mean", "var"):
+            assert np.array_equal(getattr(getattr(trained, rms), moment),
+                                  getattr(getattr(again, rms), moment))  # fmt: skip
 
 
 def test_a_resume_refuses_keys_that_would_change_what_was_learned(tmp_path, capsys):
