@@ -30,10 +30,11 @@ Then the results are aggregated into ``OUT``:
 - ``scores.png`` (the score distribution of every method's games, per env) and
   ``profiles.png`` (performance profiles of the normalised scores with 95% bands, per env).
 
-``--ship METHOD ...`` makes each method's best run (by its validation games, never the held-out
-ones) a pretrained agent that ships with the project: ``agents/pretrained/METHOD.zip`` and its
-card ``METHOD.json`` (config, commit, training, scores under the protocol), loadable as
-``pretrained:METHOD`` (``agents.policy.load_policy``).
+``--ship METHOD[=NAME] ...`` makes each method's best run (by its validation games, never the
+held-out ones) a pretrained agent that ships with the project: ``agents/pretrained/NAME.zip``
+and its card ``NAME.json`` (method, config, commit, training, scores under the protocol),
+loadable as ``pretrained:NAME`` (``agents.policy.load_policy``). NAME is the method's unless
+given: ``--ship ppo-finetune-v1=ppo-v1`` ships the best recipe under the name users load.
 
 ``--tiny`` trains a few thousand frames of small settings and plays a few games: the whole
 pipeline in about a minute, for tests.
@@ -544,16 +545,34 @@ def _draw_profiles(ax: Any, runs: dict[str, list[np.ndarray]], env_id: str) -> N
 CHECK_GAMES = 5
 
 
-def ship(name: str, seeds: list[int], settings: Settings) -> Path:
+def parse_ship(text: str) -> tuple[str, str]:
+    """``METHOD`` or ``METHOD=NAME`` (of ``--ship``): the method and the name it ships as."""
+    method, _, name = text.partition("=")
+    name = name or method
+    if method not in METHODS or not METHODS[method].trained:
+        trained = ", ".join(key for key, value in METHODS.items() if value.trained)
+        raise ConfigError(f"--ship {text}: {method!r} is not a trained method (one of {trained})")
+    if not name.replace("-", "").replace("_", "").isalnum():
+        raise ConfigError(f"--ship {text}: the name {name!r} is not letters, digits, - and _")
+    return method, name
+
+
+def ship(
+    name: str,
+    seeds: list[int],
+    settings: Settings,
+    ship_as: str | None = None,
+    into: Path | None = None,
+) -> Path:
     """Make the best run of method ``name`` (by its validation games, never the held-out ones)
-    a pretrained agent: ``agents/pretrained/NAME.zip`` (its model) and ``NAME.json``, its card:
-    the config, the commit it was trained at, its frames and minutes of training, its scores
-    under the protocol, and the scores of the first CHECK_GAMES protocol games."""
+    a pretrained agent ``ship_as`` (default: the method's name) in ``into`` (default:
+    ``agents/pretrained``): ``SHIP_AS.zip`` (its model) and ``SHIP_AS.json``, its card: the
+    method and config, the commit it was trained at, its frames and minutes of training, its
+    scores under the protocol, and the scores of the first CHECK_GAMES protocol games."""
     from agents.policy import PRETRAINED_DIR
     from agents.runs import best_validation, validation_rows
 
-    if settings.tiny:
-        raise ConfigError("--ship ships agents trained under the protocol, not --tiny ones")
+    ship_as, into = ship_as or name, into or PRETRAINED_DIR
     result = method_results(name, seeds, settings)
     if result is None or not METHODS[name].trained:
         raise ConfigError(f"{name}: no finished training run to ship in {settings.out}")
@@ -575,7 +594,8 @@ def ship(name: str, seeds: list[int], settings: Settings) -> Path:
     run = settings.out / chosen["run"]
     meta = json.loads((run / "meta.json").read_text())
     card = {
-        "name": name,
+        "name": ship_as,
+        "method": name,
         "env_id": result["env_id"],
         "config": METHODS[name].config,
         "seed": chosen["seed"],
@@ -592,13 +612,13 @@ def ship(name: str, seeds: list[int], settings: Settings) -> Path:
             "seeds": list(protocol.EVAL_SEEDS[:CHECK_GAMES]),
             "scores": chosen["scores"][:CHECK_GAMES],
         },
-        "load": f'agents.policy.load_policy("pretrained:{name}")',
+        "load": f'agents.policy.load_policy("pretrained:{ship_as}")',
     }
-    PRETRAINED_DIR.mkdir(exist_ok=True)
-    shutil.copyfile(run / MODEL_FILE, PRETRAINED_DIR / f"{name}.zip")
-    (PRETRAINED_DIR / f"{name}.json").write_text(json.dumps(card, indent=1) + "\n")
-    print(f"shipped {run} as pretrained:{name} ({card['chosen_by']})")
-    return PRETRAINED_DIR / f"{name}.zip"
+    into.mkdir(exist_ok=True)
+    shutil.copyfile(run / MODEL_FILE, into / f"{ship_as}.zip")
+    (into / f"{ship_as}.json").write_text(json.dumps(card, indent=1) + "\n")
+    print(f"shipped {run} as pretrained:{ship_as} ({card['chosen_by']})")
+    return into / f"{ship_as}.zip"
 
 
 def print_table(table: dict[str, Any]) -> None:
@@ -624,8 +644,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
     parser.add_argument("--tiny", action="store_true", help="tiny settings, for tests")
     parser.add_argument("--job", help=argparse.SUPPRESS)  # METHOD:SEED, one job (run_local's)
     parser.add_argument("--table-only", action="store_true", help="aggregate what is done")
-    parser.add_argument("--ship", nargs="+", metavar="METHOD", choices=list(METHODS),
-                        help="make each method's best run a pretrained agent")  # fmt: skip
+    parser.add_argument("--ship", nargs="+", default=[], metavar="METHOD[=NAME]",
+                        help="make each method's best run a pretrained agent (NAME)")  # fmt: skip
     args = parser.parse_args(argv)
     if args.episodes is None:
         args.episodes = TINY_EPISODES if args.tiny else len(protocol.EVAL_SEEDS)
@@ -633,8 +653,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
         parser.error("--parallel must be >= 1 and --episodes in 1..100")
     if any(seed < 0 for seed in args.seeds):
         parser.error("seeds must be >= 0")
+    if args.ship and args.tiny:
+        parser.error("--ship ships agents trained under the protocol, not --tiny ones")
     settings = Settings(args.out.resolve(), args.episodes, args.tiny)
     try:
+        ships = [parse_ship(text) for text in args.ship]
         if args.job is not None:
             name, _, seed = args.job.partition(":")
             run_job(name, int(seed), settings)
@@ -650,8 +673,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
             else:
                 run_local(todo, settings, args.parallel)
         table = aggregate_table(args.methods, args.seeds, settings)
-        for name in args.ship or ():
-            ship(name, args.seeds, settings)
+        for name, ship_as in ships:
+            ship(name, args.seeds, settings, ship_as)
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
     print_table(table)

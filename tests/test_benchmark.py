@@ -14,6 +14,7 @@ import yaml
 from agents import benchmark
 from agents.config import ConfigError
 from agents.evaluate import main as evaluate_main
+from agents.policy import load_policy
 from agents.runs import MODEL_FILE
 from pinball_env import protocol
 from pinball_env.tools import play
@@ -97,6 +98,48 @@ def test_tiny_runs_do_not_ship():
     with pytest.raises(SystemExit):
         benchmark.main(["--tiny", "--out", "/nonexistent", "--methods", "ppo-v0", "--table-only",
                         "--ship", "ppo-v0"])  # fmt: skip
+
+
+def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, monkeypatch):
+    out = tmp_path / "bench"
+    shutil.copytree(tiny[0], out)
+    # (both runs evaluated on the same games, whichever tests ran before)
+    benchmark.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0", "1",
+                    "--episodes", "2"])  # fmt: skip
+    settings = benchmark.Settings(out, episodes=2, tiny=True)
+    monkeypatch.setattr(protocol, "TRAINING_SEEDS", (0, 1))  # (two tiny runs stand for five)
+    for seed, validated in ((0, 900.0), (1, 400.0)):  # seed 0 validated better
+        run = benchmark.job_run("ppo-v0", seed, settings)
+        (run / "validation.csv").write_text(f"steps,frames,score_mean\n64,3000,{validated}\n")
+    into = tmp_path / "pretrained"
+    model = benchmark.ship("ppo-v0", [0, 1], settings, "best-v0", into)
+    card = json.loads((into / "best-v0.json").read_text())
+    chosen = benchmark.job_run("ppo-v0", 0, settings)
+    assert model == into / "best-v0.zip"
+    assert model.read_bytes() == (chosen / MODEL_FILE).read_bytes()
+    assert card["name"] == "best-v0" and card["method"] == "ppo-v0" and card["seed"] == 0
+    assert card["chosen_by"] == "the best validation score of 2 seeds (900)"
+    with open(chosen / "protocol_eval" / "episodes.csv") as file:
+        scores = [int(row["score"]) for row in csv.DictReader(file)]
+    assert card["check_games"]["scores"] == scores[: benchmark.CHECK_GAMES]
+    assert card["load"] == 'agents.policy.load_policy("pretrained:best-v0")'
+    assert load_policy(str(model)).env_id == "Pinball-v0"  # the zip carries its config
+    # A method with a seed short of the runs asked for does not ship.
+    monkeypatch.setattr(protocol, "TRAINING_SEEDS", (0, 1, 2))
+    with pytest.raises(ConfigError, match=r"ships the best of at least 3 runs .* 2 are done"):
+        benchmark.ship("ppo-v0", [0, 1, 2], settings, "best-v0", into)
+
+
+@pytest.mark.parametrize(
+    ("text", "error"),
+    [("random-v0", "'random-v0' is not a trained method"), ("nope=x", "'nope' is not a trained"),
+     ("ppo-v0=a b", "the name 'a b' is not letters")],
+)  # fmt: skip
+def test_a_bad_ship_is_refused_with_what_is_wrong(text, error):
+    with pytest.raises(ConfigError, match=error):
+        benchmark.parse_ship(text)
+    assert benchmark.parse_ship("ppo-finetune-v1=ppo-v1") == ("ppo-finetune-v1", "ppo-v1")
+    assert benchmark.parse_ship("ppo-v0") == ("ppo-v0", "ppo-v0")
 
 
 def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
