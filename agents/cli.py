@@ -18,7 +18,13 @@ from agents.config import (
     load_config,
 )
 from agents.report import report
-from agents.runs import CONFIG_FILE, MODEL_FILE, TrainingInterrupted, checkpoints_of, extend_run
+from agents.runs import (
+    CONFIG_FILE,
+    TrainingInterrupted,
+    checkpoints_of,
+    extend_run,
+    stopped_before_learning,
+)
 
 # train(config, run, resume, progress_bar, args) -> the final model's path
 Train = Callable[[AnyConfig, Path, bool, bool, argparse.Namespace], Path]
@@ -45,9 +51,10 @@ def run_config(args: argparse.Namespace, kind: type, command: list[str]) -> AnyC
     if args.resume is not None:
         if args.config is not None:
             raise ConfigError("--resume goes on with the run's own config: no --config")
-        never_learned = kind is TrainConfig and not (args.resume / MODEL_FILE).exists()
-        run = (args.resume / CONFIG_FILE).is_file()
-        if run and not checkpoints_of(args.resume) and not never_learned:
+        resumable = checkpoints_of(args.resume) or (
+            kind is TrainConfig and stopped_before_learning(args.resume)
+        )
+        if (args.resume / CONFIG_FILE).is_file() and not resumable:
             raise ConfigError(f"{args.resume}: no checkpoint to resume from")
         return extend_run(args.resume, args.overrides, kind, command)
     if args.config is None:

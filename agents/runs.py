@@ -298,6 +298,12 @@ def latest_checkpoint(run: Path) -> tuple[int, Path] | None:
     return found[-1] if found else None
 
 
+def stopped_before_learning(run: Path) -> bool:
+    """Whether a stable-baselines3 run stopped before it learned (in its warm start): no
+    checkpoint and no model. Resumed, it is trained again from the start."""
+    return not checkpoints_of(run) and not (run / MODEL_FILE).exists()
+
+
 def is_rllib_checkpoint(path: Path) -> bool:
     """Whether ``path`` is an RLlib run folder (with its final model) or checkpoint folder."""
     return (path / RLLIB_CHECKPOINT_FILE).is_file() or (

@@ -57,6 +57,7 @@ from agents.runs import (
     save_model,
     start_run,
     stats_for,
+    stopped_before_learning,
     validation_rows,
 )
 
@@ -213,8 +214,8 @@ def _train(
     started = time.monotonic()
     set_threads(config)
     checkpoint = latest_checkpoint(run) if resume else None
-    if resume and checkpoint is None:  # stopped before learning: nothing to go on from
-        if (run / MODEL_FILE).exists():
+    if resume and checkpoint is None:
+        if not stopped_before_learning(run):
             raise ConfigError(f"{run}: no checkpoint to resume from")
         print(f"{run} has no checkpoint yet: training it again from the start")
         clear_training_logs(run)
