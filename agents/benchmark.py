@@ -102,9 +102,7 @@ METHODS: dict[str, Method] = {
         "dqn_v1.yaml",
         tiny=(*_TINY, "hyperparams.learning_starts=200", "hyperparams.buffer_size=2000"),
     ),
-    "ppo-pixels-v1": Method(
-        "Pinball-v1", "ppo_pixels_v1.yaml", tiny=(*_TINY_PPO, "env.kwargs.image_size=32")
-    ),
+    "ppo-pixels-v1": Method("Pinball-v1", "ppo_pixels_v1.yaml", tiny=_TINY_PPO),
     "random-v0": Method("Pinball-v0", baseline="random"),
     "heuristic-v0": Method("Pinball-v0", baseline="heuristic"),
     "ppo-v0": Method("Pinball-v0", "ppo.yaml", tiny=_TINY_PPO),
