@@ -3,6 +3,7 @@
     python -m agents.benchmark                                   # every method, seeds 0-4
     python -m agents.benchmark --methods ppo-v1 heuristic-v1 --seeds 0 1 2 --parallel 2
     python -m agents.benchmark --address auto                    # each run a Ray task
+    python -m agents.benchmark --merge docs/benchmark.json       # the published runs reused
     python -m agents.benchmark --tiny --out /tmp/bench           # a minute: the whole pipeline
 
 A method (:data:`METHODS`) is a training config of ``configs/agents/`` on a protocol env, or a
@@ -30,6 +31,12 @@ Then the results are aggregated into ``OUT``:
 - ``scores.png`` (the score distribution of every method's games, per env) and
   ``profiles.png`` (performance profiles of the normalised scores with 95% bands, per env).
 
+``--merge BENCHMARK_JSON ...`` takes the runs OUT lacks from earlier benchmarks (another
+machine's, or the results published in ``docs/benchmark.json``: run folders are outputs, the
+published file keeps every run's game scores, its commit and the digest of its config); their
+jobs are not run again, and a file of another protocol or a run of a config changed since is
+refused. A table can so grow over machines and sessions, a run at a time.
+
 ``--ship METHOD[=NAME] ...`` makes each method's best run (by its validation games, never the
 held-out ones) a pretrained agent that ships with the project: ``agents/pretrained/NAME.zip``
 and its card ``NAME.json`` (method, config, commit, training, scores under the protocol),
@@ -44,6 +51,7 @@ import argparse
 import concurrent.futures
 import csv
 import dataclasses
+import hashlib
 import io
 import json
 import os
@@ -67,6 +75,8 @@ CONFIGS = Path(__file__).resolve().parent.parent / "configs" / "agents"
 COMMIT_VARIABLE = "PINBALL_SOURCE_COMMIT"  # a cluster node's commit: the driver's (agents.runs)
 JOB_FILE = "job.json"  # in OUT/METHOD/seedS: where and how long the job trained and evaluated
 SUMMARY = "summary.json"
+# Runs of earlier benchmarks (--merge): per method, its runs as benchmark.json has them.
+Merged = dict[str, list[dict[str, Any]]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -151,12 +161,8 @@ def job_run(
     if not runs:
         return None
     expected = config or job_config(name, seed, settings)
-    found, wanted = _flat(load_run_config(runs[0]).to_dict()), _flat(expected.to_dict())
-    differ = sorted(
-        key
-        for key in found.keys() | wanted.keys()
-        if key != "notes" and found.get(key) != wanted.get(key)  # (words do not train)
-    )
+    found, wanted = _trained_by(load_run_config(runs[0])), _trained_by(expected)
+    differ = sorted(key for key in found | wanted if found.get(key) != wanted.get(key))
     if differ:
         raise ConfigError(
             f"{runs[0]}: trained with another config than {name} seed {seed} under the protocol "
@@ -164,6 +170,17 @@ def job_run(
             "; delete it, or give another --out)"
         )
     return runs[0]
+
+
+def _trained_by(config: TrainConfig) -> dict[str, Any]:
+    """What of a config trains, flat: all of it but its ``notes`` (words do not train)."""
+    return {key: value for key, value in _flat(config.to_dict()).items() if key != "notes"}
+
+
+def config_digest(config: TrainConfig) -> str:
+    """A short digest of what of ``config`` trains: a run of another config has another."""
+    text = json.dumps(_trained_by(config), sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def _flat(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
@@ -358,12 +375,16 @@ def run_on_cluster(jobs: list[tuple[str, int]], settings: Settings, address: str
 # --- the table ----------------------------------------------------------------------------------
 
 
-def method_results(name: str, seeds: list[int], settings: Settings) -> dict[str, Any] | None:
-    """The runs of a method that are done and the protocol's metrics over them (None: none)."""
+def method_results(
+    name: str, seeds: list[int], settings: Settings, merged: Merged | None = None
+) -> dict[str, Any] | None:
+    """The runs of a method that are done (in OUT, else in ``merged``: :func:`merged_runs`) and
+    the protocol's metrics over them (None: none)."""
     method = METHODS[name]
     runs = []
     for seed in seeds if method.trained else [0]:
         if not job_done(name, seed, settings):
+            runs.extend(_merged_run(merged, name, seed))
             continue
         folder = job_folder(settings, name, seed)
         run = job_run(name, seed, settings) if method.trained else folder
@@ -385,6 +406,52 @@ def method_results(name: str, seeds: list[int], settings: Settings) -> dict[str,
             **metrics, "runs": runs}  # fmt: skip
 
 
+# What of the protocol a run's scores depend on: a merged run was measured under the same.
+SCORED_UNDER = ("env_ids", "repeat_action_probability", "game", "training_frames", "eval_seeds",
+                "tiny")  # fmt: skip
+
+
+def merged_runs(paths: list[Path], names: list[str], settings: Settings) -> Merged:
+    """The runs of earlier ``benchmark.json`` files (another machine's, or the one published in
+    ``docs/``) for methods ``names``, the first file's run of a seed before a later one's;
+    ConfigError where one was measured under another protocol than this benchmark's or trained
+    by another config than its method's now."""
+    ours = json.loads(json.dumps(protocol_record(settings)))
+    merged: Merged = {}
+    for path in paths:
+        try:
+            table = json.loads(path.read_text())
+            theirs, methods = table["protocol"], table["methods"]
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            raise ConfigError(f"--merge {path}: not a benchmark.json ({error})") from None
+        differ = [key for key in SCORED_UNDER if theirs.get(key) != ours[key]]
+        if differ:
+            raise ConfigError(
+                f"--merge {path}: measured under another protocol than this benchmark's ("
+                + ", ".join(f"{key}: {theirs.get(key)!r}, not {ours[key]!r}" for key in differ)
+                + ")"
+            )
+        for name in names:
+            for run in methods.get(name, {}).get("runs", []):
+                if _merged_run(merged, name, run["seed"]):
+                    continue
+                if METHODS[name].trained:
+                    digest = config_digest(job_config(name, run["seed"], settings))
+                    if run.get("config_digest") != digest:
+                        raise ConfigError(
+                            f"--merge {path}: {name} seed {run['seed']} was trained by another "
+                            f"config than {METHODS[name].config} is now (train it again)"
+                        )
+                merged.setdefault(name, []).append({**run, "from": run.get("from", str(path))})
+    return merged
+
+
+def _merged_run(merged: Merged | None, name: str, seed: int) -> list[dict[str, Any]]:
+    """The merged run of a method x seed, as a list of it or none."""
+    wanted = seed if METHODS[name].trained else None
+    return [run for run in (merged or {}).get(name, []) if run["seed"] == wanted][:1]
+
+
 def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
     """A run's frames and steps trained and its minutes of training (the job's record, or for a
     run trained outside the benchmark, from its start to its model)."""
@@ -396,17 +463,36 @@ def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
         "steps": max((int(float(row["time/total_timesteps"])) for row in rows), default=0),
     }  # fmt: skip
     frames, steps = trained["frames"], trained["steps"]
+    digest = config_digest(load_run_config(run))
     seconds = job.get("train_seconds")
     if seconds is None:
         started = time.mktime(time.strptime(meta["started"], "%Y-%m-%dT%H:%M:%S"))
         seconds = (run / MODEL_FILE).stat().st_mtime - started
-    return {"frames": frames, "steps": steps, "train_minutes": round(seconds / 60.0, 1)}
+    return {"frames": frames, "steps": steps, "train_minutes": round(seconds / 60.0, 1),
+            "commit": meta.get("commit"), "config_digest": digest}  # fmt: skip
 
 
-def aggregate_table(names: list[str], seeds: list[int], settings: Settings) -> dict[str, Any]:
+def protocol_record(settings: Settings) -> dict[str, Any]:
+    """The protocol as this benchmark applies it (``benchmark.json``'s ``protocol``)."""
+    first = protocol.EVAL_SEEDS.start
+    return {
+        "env_ids": list(protocol.ENV_IDS),
+        "repeat_action_probability": protocol.REPEAT_ACTION_PROBABILITY,
+        "game": protocol.GAME_OPTIONS,
+        "training_frames": settings.frames,
+        "eval_seeds": [first, first + settings.episodes - 1],
+        "reference_scores": protocol.REFERENCE_SCORES,
+        "human_scores": protocol.HUMAN_SCORES,
+        "tiny": settings.tiny,
+    }
+
+
+def aggregate_table(
+    names: list[str], seeds: list[int], settings: Settings, merged: Merged | None = None
+) -> dict[str, Any]:
     """Write benchmark.json, benchmark.csv, runs.csv and the plots; returns the table."""
-    methods = {name: result for name in names
-               if (result := method_results(name, seeds, settings)) is not None}  # fmt: skip
+    results = {name: method_results(name, seeds, settings, merged) for name in names}
+    methods = {name: result for name, result in results.items() if result is not None}
     reference: dict[str, dict[str, float]] = {}
     for name, result in methods.items():
         if METHODS[name].baseline is not None:
@@ -414,19 +500,7 @@ def aggregate_table(names: list[str], seeds: list[int], settings: Settings) -> d
                 "score_mean"
             ]
     table = {
-        "protocol": {
-            "env_ids": list(protocol.ENV_IDS),
-            "repeat_action_probability": protocol.REPEAT_ACTION_PROBABILITY,
-            "game": protocol.GAME_OPTIONS,
-            "training_frames": settings.frames,
-            "eval_seeds": [
-                protocol.EVAL_SEEDS.start,
-                protocol.EVAL_SEEDS.start + settings.episodes - 1,
-            ],
-            "reference_scores": protocol.REFERENCE_SCORES,
-            "human_scores": protocol.HUMAN_SCORES,
-            "tiny": settings.tiny,
-        },
+        "protocol": protocol_record(settings),
         "commit": source_commit(),
         "reference_measured": reference,
         "methods": methods,
@@ -446,7 +520,7 @@ METHOD_COLUMNS = ("method", "env_id", "runs", "games", "score_mean", "score_mean
                   "normalized_iqm", "normalized_iqm_low", "normalized_iqm_high",
                   "train_minutes_mean")  # fmt: skip
 RUN_COLUMNS = ("method", "env_id", "seed", "run", "score_mean", "score_iqm", "frames", "steps",
-               "train_minutes")  # fmt: skip
+               "train_minutes", "commit", "from")  # fmt: skip
 
 
 def _write_csvs(methods: dict[str, Any], out: Path) -> None:
@@ -642,6 +716,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
     parser.add_argument("--tiny", action="store_true", help="tiny settings, for tests")
     parser.add_argument("--job", help=argparse.SUPPRESS)  # METHOD:SEED, one job (run_local's)
     parser.add_argument("--table-only", action="store_true", help="aggregate what is done")
+    parser.add_argument("--merge", nargs="+", type=Path, default=[], metavar="BENCHMARK_JSON",
+                        help="runs of earlier benchmarks that OUT lacks")  # fmt: skip
     parser.add_argument("--ship", nargs="+", default=[], metavar="METHOD[=NAME]",
                         help="make each method's best run a pretrained agent (NAME)")  # fmt: skip
     args = parser.parse_args(argv)
@@ -663,14 +739,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
         args.methods, args.seeds = list(dict.fromkeys(args.methods)), sorted(set(args.seeds))
         jobs = [(name, seed) for name in args.methods
                 for seed in (args.seeds if METHODS[name].trained else [0])]  # fmt: skip
-        todo = [job for job in jobs if not job_done(*job, settings)]
+        merged = merged_runs(args.merge, args.methods, settings)
+        todo = [job for job in jobs
+                if not job_done(*job, settings) and not _merged_run(merged, *job)]  # fmt: skip
         if todo and not args.table_only:
             print(f"{len(jobs) - len(todo)} of {len(jobs)} jobs done already; running {len(todo)}")
             if args.address:
                 run_on_cluster(todo, settings, args.address)
             else:
                 run_local(todo, settings, args.parallel)
-        table = aggregate_table(args.methods, args.seeds, settings)
+        table = aggregate_table(args.methods, args.seeds, settings, merged)
         for name, ship_as in ships:
             ship(name, args.seeds, settings, ship_as)
     except ConfigError as error:

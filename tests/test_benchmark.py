@@ -94,6 +94,48 @@ def test_a_run_stopped_before_its_first_checkpoint_starts_again(tiny):
     assert (again / MODEL_FILE).is_file() and not (again / "progress_0.csv").exists()
 
 
+def test_runs_of_an_earlier_benchmark_are_merged_not_trained_again(tiny, tmp_path):
+    out, _ = tiny
+    names = ["--methods", "random-v0", "ppo-v0", "--seeds", "0", "1"]
+    # (the fixture's runs evaluated on its games again, whichever tests ran before)
+    earlier = benchmark.main(["--tiny", "--out", str(out), *names])
+    published = tmp_path / "published.json"
+    shutil.copyfile(out / "benchmark.json", published)
+    here = tmp_path / "here"
+    shutil.copytree(out / "ppo-v0" / "seed1", here / "ppo-v0" / "seed1")  # one run here
+    table = benchmark.main(["--tiny", "--out", str(here), *names, "--merge", str(published)])
+    assert sorted(p.name for p in here.iterdir() if p.is_dir()) == ["ppo-v0"]  # none played
+    assert sorted(p.name for p in (here / "ppo-v0").iterdir()) == ["seed1"]  # none trained
+    for name in ("random-v0", "ppo-v0"):
+        ours, theirs = table["methods"][name], earlier["methods"][name]
+        assert [run["scores"] for run in ours["runs"]] == [run["scores"] for run in theirs["runs"]]
+        assert ours["score_iqm_ci95"] == theirs["score_iqm_ci95"]
+    seed0, seed1 = table["methods"]["ppo-v0"]["runs"]
+    assert seed0["from"] == str(published) and "from" not in seed1  # a run here comes first
+    assert table["methods"]["random-v0"]["runs"][0]["from"] == str(published)
+    assert seed0["commit"] == earlier["methods"]["ppo-v0"]["runs"][0]["commit"]
+
+
+def test_an_earlier_benchmark_of_another_protocol_or_config_is_refused(tiny, tmp_path):
+    out, _ = tiny
+    benchmark.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0"])
+    table = json.loads((out / "benchmark.json").read_text())
+    settings, path = benchmark.Settings(tmp_path, episodes=2, tiny=True), tmp_path / "b.json"
+    path.write_text(json.dumps(table))
+    with pytest.raises(ConfigError, match=r"another protocol .*eval_seeds: \[100000, 100002\]"):
+        benchmark.merged_runs([path], ["ppo-v0"], settings)
+    settings = benchmark.Settings(tmp_path, benchmark.TINY_EPISODES, tiny=True)
+    assert len(benchmark.merged_runs([path], ["ppo-v0"], settings)["ppo-v0"]) == 1
+    table["methods"]["ppo-v0"]["runs"][0]["config_digest"] = "0" * 16  # its config since changed
+    path.write_text(json.dumps(table))
+    with pytest.raises(ConfigError, match="ppo-v0 seed 0 was trained by another config"):
+        benchmark.merged_runs([path], ["ppo-v0"], settings)
+    assert benchmark.merged_runs([path], ["random-v0"], settings) == {}  # (not asked for)
+    path.write_text("[1, 2]")
+    with pytest.raises(ConfigError, match=r"not a benchmark\.json"):
+        benchmark.merged_runs([path], ["ppo-v0"], settings)
+
+
 def test_tiny_runs_do_not_ship():
     with pytest.raises(SystemExit):
         benchmark.main(["--tiny", "--out", "/nonexistent", "--methods", "ppo-v0", "--table-only",
