@@ -136,6 +136,28 @@ def test_an_earlier_benchmark_of_another_protocol_or_config_is_refused(tiny, tmp
         benchmark.merged_runs([path], ["ppo-v0"], settings)
 
 
+PUBLISHED = Path(__file__).resolve().parent.parent / "docs" / "benchmark.json"
+
+
+def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path):
+    published = json.loads(PUBLISHED.read_text())
+    # Refused if the protocol or a method's config has changed since its runs were trained.
+    merged = benchmark.merged_runs([PUBLISHED], list(published["methods"]),
+                                   benchmark.Settings(tmp_path))  # fmt: skip
+    assert merged.keys() == published["methods"].keys()
+    for name, result in published["methods"].items():
+        runs = result["runs"]
+        assert [run["scores"] for run in merged[name]] == [run["scores"] for run in runs]
+        assert all(len(run["scores"]) == len(protocol.EVAL_SEEDS) for run in runs)
+        if benchmark.METHODS[name].trained:
+            assert len(runs) >= 3 and all(run["commit"] for run in runs)
+            assert all(run["frames"] >= 0.99 * protocol.TRAINING_FRAMES for run in runs)
+        # Its metrics are those of its scores.
+        metrics = protocol.aggregate([run["scores"] for run in runs], result["env_id"])
+        assert metrics.pop("runs") == len(runs)
+        assert {key: result[key] for key in metrics} == json.loads(json.dumps(metrics))
+
+
 def test_tiny_runs_do_not_ship():
     with pytest.raises(SystemExit):
         benchmark.main(["--tiny", "--out", "/nonexistent", "--methods", "ppo-v0", "--table-only",
