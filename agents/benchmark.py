@@ -68,7 +68,14 @@ import numpy as np
 
 from agents.config import ConfigError, TrainConfig, config_from_dict, load_config, load_run_config
 from agents.report import PROTOCOL_EVAL, evaluate
-from agents.runs import MODEL_FILE, latest_checkpoint, progress_rows, source_commit
+from agents.runs import (
+    MODEL_FILE,
+    best_validation,
+    latest_checkpoint,
+    progress_rows,
+    source_commit,
+    validation_rows,
+)
 from pinball_env import protocol
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs" / "agents"
@@ -453,8 +460,9 @@ def _merged_run(merged: Merged | None, name: str, seed: int) -> list[dict[str, A
 
 
 def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
-    """A run's frames and steps trained and its minutes of training (the job's record, or for a
-    run trained outside the benchmark, from its start to its model)."""
+    """A run's frames and steps trained, its minutes of training (the job's record, or for a run
+    trained outside the benchmark, from its start to its model), its best validation score (its
+    model's), its commit and its config's digest."""
     meta = json.loads((run / "meta.json").read_text())
     rows = progress_rows(run)  # (a run from before meta.json's "trained": its last rollout's)
     trained = meta.get("trained") or {
@@ -464,12 +472,14 @@ def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
     }  # fmt: skip
     frames, steps = trained["frames"], trained["steps"]
     digest = config_digest(load_run_config(run))
+    validated = best_validation(validation_rows(run))
     seconds = job.get("train_seconds")
     if seconds is None:
         started = time.mktime(time.strptime(meta["started"], "%Y-%m-%dT%H:%M:%S"))
         seconds = (run / MODEL_FILE).stat().st_mtime - started
     return {"frames": frames, "steps": steps, "train_minutes": round(seconds / 60.0, 1),
-            "commit": meta.get("commit"), "config_digest": digest}  # fmt: skip
+            "validation": validated and validated["score_mean"], "commit": meta.get("commit"),
+            "config_digest": digest}  # fmt: skip
 
 
 def protocol_record(settings: Settings) -> dict[str, Any]:
@@ -520,7 +530,7 @@ METHOD_COLUMNS = ("method", "env_id", "runs", "games", "score_mean", "score_mean
                   "normalized_iqm", "normalized_iqm_low", "normalized_iqm_high",
                   "train_minutes_mean")  # fmt: skip
 RUN_COLUMNS = ("method", "env_id", "seed", "run", "score_mean", "score_iqm", "frames", "steps",
-               "train_minutes", "commit", "from")  # fmt: skip
+               "train_minutes", "validation", "commit", "from")  # fmt: skip
 
 
 def _write_csvs(methods: dict[str, Any], out: Path) -> None:
@@ -635,46 +645,48 @@ def ship(
     settings: Settings,
     ship_as: str | None = None,
     into: Path | None = None,
+    merged: Merged | None = None,
 ) -> Path:
-    """Make the best run of method ``name`` (by its validation games, never the held-out ones)
-    a pretrained agent ``ship_as`` (default: the method's name) in ``into`` (default:
-    ``agents/pretrained``): ``SHIP_AS.zip`` (its model) and ``SHIP_AS.json``, its card: the
-    method and config, the commit it was trained at, its frames and minutes of training, its
-    scores under the protocol, and the scores of the first CHECK_GAMES protocol games."""
+    """Make the best run of method ``name`` (by its validation games, never the held-out ones;
+    of the runs in OUT and ``merged``, the chosen one in OUT) a pretrained agent ``ship_as``
+    (default: the method's name) in ``into`` (default: ``agents/pretrained``): ``SHIP_AS.zip``
+    (its model) and ``SHIP_AS.json``, its card: the method and config, the commit it was
+    trained at, its frames and minutes of training, its scores under the protocol, and the
+    scores of the first CHECK_GAMES protocol games."""
     from agents.policy import PRETRAINED_DIR
-    from agents.runs import best_validation, validation_rows
 
     ship_as, into = ship_as or name, into or PRETRAINED_DIR
-    result = method_results(name, seeds, settings)
+    result = method_results(name, seeds, settings, merged)
     if result is None or not METHODS[name].trained:
         raise ConfigError(f"{name}: no finished training run to ship in {settings.out}")
-    short = [run["seed"] for run in result["runs"] if run["frames"] < 0.99 * settings.frames]
-    if short or len(result["runs"]) < len(protocol.TRAINING_SEEDS):
+    runs = result["runs"]
+    short = [run["seed"] for run in runs if run["frames"] < 0.99 * settings.frames]
+    if short or len(runs) < len(protocol.TRAINING_SEEDS):
         raise ConfigError(
             f"{name}: ships the best of at least {len(protocol.TRAINING_SEEDS)} runs trained for "
-            f"the protocol's frames; {len(result['runs'])} are done"
+            f"the protocol's frames; {len(runs)} are done"
             + (f", seeds {short} stopped short" if short else "")
         )
-
-    def validation(run: dict[str, Any]) -> float:  # (never the held-out games)
-        best = best_validation(validation_rows(settings.out / run["run"]))
-        if best is None:
-            raise ConfigError(f"{run['run']}: no validation games to choose the agent by")
-        return best["score_mean"]
-
-    chosen = max(result["runs"], key=validation)
+    unvalidated = [run["seed"] for run in runs if run.get("validation") is None]
+    if unvalidated:
+        raise ConfigError(f"{name}: seeds {unvalidated} have no validation games to choose by")
+    chosen = max(runs, key=lambda run: run["validation"])
+    chosen_by = f"the best validation score of {len(runs)} seeds ({chosen['validation']:.0f})"
+    if "from" in chosen:
+        raise ConfigError(
+            f"{name}: its best run, seed {chosen['seed']} ({chosen_by}), is in {chosen['from']} "
+            f"but not in {settings.out}: train it there (--seeds {chosen['seed']}) to ship it"
+        )
     run = settings.out / chosen["run"]
-    meta = json.loads((run / "meta.json").read_text())
     card = {
         "name": ship_as,
         "method": name,
         "env_id": result["env_id"],
         "config": METHODS[name].config,
         "seed": chosen["seed"],
-        "commit": meta.get("commit"),
+        "commit": chosen["commit"],
         "trained": {key: chosen[key] for key in ("frames", "steps", "train_minutes")},
-        "chosen_by": f"the best validation score of {len(result['runs'])} seeds "
-        f"({validation(chosen):.0f})",
+        "chosen_by": chosen_by,
         "protocol": {
             key: value
             for key, value in protocol.aggregate([chosen["scores"]], result["env_id"]).items()
@@ -750,7 +762,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
                 run_local(todo, settings, args.parallel)
         table = aggregate_table(args.methods, args.seeds, settings, merged)
         for name, ship_as in ships:
-            ship(name, args.seeds, settings, ship_as)
+            ship(name, args.seeds, settings, ship_as, merged=merged)
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
     print_table(table)

@@ -188,6 +188,18 @@ def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, m
     assert card["check_games"]["scores"] == scores[: benchmark.CHECK_GAMES]
     assert card["load"] == 'agents.policy.load_policy("pretrained:best-v0")'
     assert load_policy(str(model)).env_id == "Pinball-v0"  # the zip carries its config
+    # Runs published elsewhere count in the choice; the chosen one ships from a run here.
+    benchmark.aggregate_table(["ppo-v0"], [0, 1], settings)
+    here = benchmark.Settings(tmp_path / "here", episodes=2, tiny=True)
+    shutil.copytree(out / "ppo-v0" / "seed1", here.out / "ppo-v0" / "seed1")
+    merged = benchmark.merged_runs([out / "benchmark.json"], ["ppo-v0"], here)
+    with pytest.raises(ConfigError, match=r"best run, seed 0 .*\(900\).*\(--seeds 0\)"):
+        benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
+    run = benchmark.job_run("ppo-v0", 1, here)
+    (run / "validation.csv").write_text("steps,frames,score_mean\n64,3000,1000\n")
+    benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
+    card = json.loads((into / "best-v0.json").read_text())
+    assert card["seed"] == 1 and card["chosen_by"].endswith("of 2 seeds (1000)")
     # A method with a seed short of the runs asked for does not ship.
     monkeypatch.setattr(protocol, "TRAINING_SEEDS", (0, 1, 2))
     with pytest.raises(ConfigError, match=r"ships the best of at least 3 runs .* 2 are done"):
