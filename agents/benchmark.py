@@ -391,7 +391,8 @@ def method_results(
     runs = []
     for seed in seeds if method.trained else [0]:
         if not job_done(name, seed, settings):
-            runs.extend(_merged_run(merged, name, seed))
+            if (earlier := _merged_run(merged, name, seed)) is not None:
+                runs.append(earlier)
             continue
         folder = job_folder(settings, name, seed)
         run = job_run(name, seed, settings) if method.trained else folder
@@ -440,7 +441,7 @@ def merged_runs(paths: list[Path], names: list[str], settings: Settings) -> Merg
             )
         for name in names:
             for run in methods.get(name, {}).get("runs", []):
-                if _merged_run(merged, name, run["seed"]):
+                if _merged_run(merged, name, run["seed"]) is not None:
                     continue
                 if METHODS[name].trained:
                     digest = config_digest(job_config(name, run["seed"], settings))
@@ -453,10 +454,10 @@ def merged_runs(paths: list[Path], names: list[str], settings: Settings) -> Merg
     return merged
 
 
-def _merged_run(merged: Merged | None, name: str, seed: int) -> list[dict[str, Any]]:
-    """The merged run of a method x seed, as a list of it or none."""
+def _merged_run(merged: Merged | None, name: str, seed: int | None) -> dict[str, Any] | None:
+    """The merged run of a method x seed (a baseline's: its one run), or None."""
     wanted = seed if METHODS[name].trained else None
-    return [run for run in (merged or {}).get(name, []) if run["seed"] == wanted][:1]
+    return next((run for run in (merged or {}).get(name, []) if run["seed"] == wanted), None)
 
 
 def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
@@ -753,7 +754,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
                 for seed in (args.seeds if METHODS[name].trained else [0])]  # fmt: skip
         merged = merged_runs(args.merge, args.methods, settings)
         todo = [job for job in jobs
-                if not job_done(*job, settings) and not _merged_run(merged, *job)]  # fmt: skip
+                if not job_done(*job, settings) and _merged_run(merged, *job) is None]  # fmt: skip
         if todo and not args.table_only:
             print(f"{len(jobs) - len(todo)} of {len(jobs)} jobs done already; running {len(todo)}")
             if args.address:
