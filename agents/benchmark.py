@@ -41,7 +41,9 @@ refused. A table can so grow over machines and sessions, a run at a time.
 held-out ones) a pretrained agent that ships with the project: ``agents/pretrained/NAME.zip``
 and its card ``NAME.json`` (method, config, commit, training, scores under the protocol),
 loadable as ``pretrained:NAME`` (``agents.policy.load_policy``). NAME is the method's unless
-given: ``--ship ppo-finetune-v1=ppo-v1`` ships the best recipe under the name users load.
+given: ``--ship ppo-finetune-v1=ppo-v1`` ships the best recipe under the name users load. The
+chosen run must be in OUT, where its model is; ``--ship-from-out`` ships the best run there when
+a better merged one's model is gone, and its card says so.
 
 ``--tiny`` trains a few thousand frames of small settings and plays a few games: the whole
 pipeline in about a minute, for tests.
@@ -647,9 +649,11 @@ def ship(
     ship_as: str | None = None,
     into: Path | None = None,
     merged: Merged | None = None,
+    from_out: bool = False,
 ) -> Path:
     """Make the best run of method ``name`` (by its validation games, never the held-out ones;
-    of the runs in OUT and ``merged``, the chosen one in OUT) a pretrained agent ``ship_as``
+    of the runs in OUT and ``merged``, the chosen one in OUT; with ``from_out``, of those in OUT
+    alone, the card naming the better run whose model is not here) a pretrained agent ``ship_as``
     (default: the method's name) in ``into`` (default: ``agents/pretrained``): ``SHIP_AS.zip``
     (its model) and ``SHIP_AS.json``, its card: the method and config, the commit it was
     trained at, its frames and minutes of training, its scores under the protocol, and the
@@ -671,12 +675,21 @@ def ship(
     unvalidated = [run["seed"] for run in runs if run.get("validation") is None]
     if unvalidated:
         raise ConfigError(f"{name}: seeds {unvalidated} have no validation games to choose by")
-    chosen = max(runs, key=lambda run: run["validation"])
-    chosen_by = f"the best validation score of {len(runs)} seeds ({chosen['validation']:.0f})"
-    if "from" in chosen:
+    best = max(runs, key=lambda run: run["validation"])
+    chosen_by = f"the best validation score of {len(runs)} seeds ({best['validation']:.0f})"
+    here = [run for run in runs if "from" not in run]
+    if "from" in best and not (from_out and here):
         raise ConfigError(
-            f"{name}: its best run, seed {chosen['seed']} ({chosen_by}), is in {chosen['from']} "
-            f"but not in {settings.out}: train it there (--seeds {chosen['seed']}) to ship it"
+            f"{name}: its best run, seed {best['seed']} ({chosen_by}), is in {best['from']} "
+            f"but not in {settings.out}: train it there (--seeds {best['seed']}) to ship it, "
+            f"or ship the best of the runs there (--ship-from-out)"
+        )
+    chosen = max(here, key=lambda run: run["validation"])
+    if chosen is not best:
+        chosen_by = (
+            f"the best validation score of the {len(here)} of {len(runs)} seeds whose models "
+            f"are here ({chosen['validation']:.0f}; seed {best['seed']}'s model, "
+            f"{best['validation']:.0f}, was not kept)"
         )
     run = settings.out / chosen["run"]
     card = {
@@ -733,6 +746,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
                         help="runs of earlier benchmarks that OUT lacks")  # fmt: skip
     parser.add_argument("--ship", nargs="+", default=[], metavar="METHOD[=NAME]",
                         help="make each method's best run a pretrained agent (NAME)")  # fmt: skip
+    parser.add_argument("--ship-from-out", action="store_true",
+                        help="--ship the best run in OUT, not of merged ones")  # fmt: skip
     args = parser.parse_args(argv)
     if args.episodes is None:
         args.episodes = TINY_EPISODES if args.tiny else len(protocol.EVAL_SEEDS)
@@ -763,7 +778,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
                 run_local(todo, settings, args.parallel)
         table = aggregate_table(args.methods, args.seeds, settings, merged)
         for name, ship_as in ships:
-            ship(name, args.seeds, settings, ship_as, merged=merged)
+            ship(name, args.seeds, settings, ship_as, merged=merged, from_out=args.ship_from_out)
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
     print_table(table)

@@ -195,6 +195,13 @@ def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, m
     merged = benchmark.merged_runs([out / "benchmark.json"], ["ppo-v0"], here)
     with pytest.raises(ConfigError, match=r"best run, seed 0 .*\(900\).*\(--seeds 0\)"):
         benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
+    # ... or, asked to, the best of the runs here, the card saying what was better.
+    benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged, from_out=True)
+    card = json.loads((into / "best-v0.json").read_text())
+    assert card["seed"] == 1 and card["chosen_by"] == (
+        "the best validation score of the 1 of 2 seeds whose models are here (400; "
+        "seed 0's model, 900, was not kept)"
+    )
     run = benchmark.job_run("ppo-v0", 1, here)
     (run / "validation.csv").write_text("steps,frames,score_mean\n64,3000,1000\n")
     benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
