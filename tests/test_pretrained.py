@@ -1,5 +1,8 @@
 """The agents that ship (agents/pretrained): each loads by name and scores as its card says."""
 
+import json
+from pathlib import Path
+
 import pytest
 
 from agents.config import ConfigError
@@ -26,6 +29,20 @@ def test_a_pretrained_agent_scores_as_its_card_says(name, tmp_path):
               (tmp_path / "episodes.csv").read_text().splitlines()[1:]]  # fmt: skip
     assert scores == games["scores"]
     assert card["protocol"]["games"] == 100 and card["commit"]
+
+
+@pytest.mark.parametrize("name", PRETRAINED)
+def test_a_pretrained_agent_is_a_published_run(name):
+    # Its card's figures are those of its run in the published table (docs/benchmark.json).
+    card = pretrained_card(name)
+    published = Path(__file__).resolve().parent.parent / "docs" / "benchmark.json"
+    runs = json.loads(published.read_text())["methods"][card.get("method", name)]["runs"]
+    (run,) = [run for run in runs if run["seed"] == card["seed"]]
+    assert (run["commit"], run["frames"], run["steps"]) == (
+        card["commit"], card["trained"]["frames"], card["trained"]["steps"])  # fmt: skip
+    assert (run["score_mean"], run["score_iqm"]) == (
+        card["protocol"]["score_mean"], card["protocol"]["score_iqm"])  # fmt: skip
+    assert run["scores"][: len(card["check_games"]["scores"])] == card["check_games"]["scores"]
 
 
 def test_an_unknown_pretrained_agent_is_named_with_those_that_ship():
