@@ -239,13 +239,16 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
     run = job_run(name, seed, settings, config)
     if run is not None and latest_checkpoint(run) is None:  # stopped before its first: anew
         shutil.rmtree(run)
+        (folder / JOB_FILE).unlink(missing_ok=True)  # (its minutes trained nothing kept)
         run = None
     if run is None or not (run / MODEL_FILE).is_file():
         resume = run is not None
         if run is None:
             run = start(config, folder, ["agents.benchmark", name, f"seed={seed}"])
-        train(config, run, resume=resume, progress_bar=False)
-        _log_job(folder, train_seconds=time.monotonic() - started)
+        try:
+            train(config, run, resume=resume, progress_bar=False)
+        finally:  # a stopped job's minutes count in the run's, which goes on from its checkpoint
+            _log_job(folder, train_seconds=time.monotonic() - started)
     started = time.monotonic()
     evaluate(model_path=run, episodes=settings.episodes, out=run / PROTOCOL_EVAL, protocol=True)
     _log_job(folder, evaluate_seconds=time.monotonic() - started)

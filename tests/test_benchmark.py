@@ -4,6 +4,7 @@ protocol."""
 import csv
 import json
 import shutil
+import time
 from pathlib import Path
 
 import gymnasium as gym
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
+import agents.train
 from agents import benchmark
 from agents.config import ConfigError
 from agents.evaluate import main as evaluate_main
@@ -81,6 +83,27 @@ def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
                             "--episodes", "2"])  # fmt: skip
     assert fewer["methods"]["ppo-v0"]["games"] == 2
     assert first.stat().st_mtime_ns == first_model.st_mtime_ns
+
+
+def test_a_stopped_jobs_minutes_count_in_its_run(tiny, monkeypatch):
+    out, _ = tiny
+    settings = benchmark.Settings(out, episodes=benchmark.TINY_EPISODES, tiny=True)
+    record = benchmark.job_folder(settings, "ppo-v0", 1) / benchmark.JOB_FILE
+    (benchmark.job_run("ppo-v0", 1, settings) / MODEL_FILE).unlink()
+    before = json.loads(record.read_text())["train_seconds"]
+
+    def stopped(*args, **kwargs):  # a training that ran a while, then was stopped
+        time.sleep(0.2)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(agents.train, "train", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        benchmark.run_job("ppo-v0", 1, settings)
+    after_stop = json.loads(record.read_text())["train_seconds"]
+    assert after_stop >= before + 0.2 - 0.05  # (rounded to a tenth)
+    monkeypatch.undo()
+    benchmark.run_job("ppo-v0", 1, settings)  # goes on from its checkpoint: its minutes add up
+    assert json.loads(record.read_text())["train_seconds"] > after_stop
 
 
 def test_a_run_stopped_before_its_first_checkpoint_starts_again(tiny):
