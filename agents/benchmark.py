@@ -239,7 +239,7 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
     run = job_run(name, seed, settings, config)
     if run is not None and latest_checkpoint(run) is None:  # stopped before its first: anew
         shutil.rmtree(run)
-        (folder / JOB_FILE).unlink(missing_ok=True)  # (its minutes trained nothing kept)
+        (folder / JOB_FILE).unlink(missing_ok=True)  # (and the minutes thrown away with it)
         run = None
     if run is None or not (run / MODEL_FILE).is_file():
         resume = run is not None
