@@ -229,11 +229,11 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
     if job_done(name, seed, settings, config):
         return folder
     folder.mkdir(parents=True, exist_ok=True)
-    started = time.monotonic()
     if not method.trained:
+        evaluation_started = time.monotonic()
         evaluate(policy=method.baseline, env=method.env_id, episodes=settings.episodes,
                  out=folder / PROTOCOL_EVAL, protocol=True)  # fmt: skip
-        _log_job(folder, evaluate_seconds=time.monotonic() - started)
+        _log_job(folder, evaluate_seconds=time.monotonic() - evaluation_started)
         return folder
     from agents.train import start, train
 
@@ -244,15 +244,16 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
         run = None
     if run is None or not (run / MODEL_FILE).is_file():
         resume = run is not None
+        training_started = time.monotonic()
         if run is None:
             run = start(config, folder, ["agents.benchmark", name, f"seed={seed}"])
         try:
             train(config, run, resume=resume, progress_bar=False)
         finally:  # a stopped job's minutes count in the run's, which goes on from its checkpoint
-            _log_job(folder, train_seconds=time.monotonic() - started)
-    started = time.monotonic()
+            _log_job(folder, train_seconds=time.monotonic() - training_started)
+    evaluation_started = time.monotonic()
     evaluate(model_path=run, episodes=settings.episodes, out=run / PROTOCOL_EVAL, protocol=True)
-    _log_job(folder, evaluate_seconds=time.monotonic() - started)
+    _log_job(folder, evaluate_seconds=time.monotonic() - evaluation_started)
     return folder
 
 
