@@ -263,7 +263,7 @@ def _log_job(folder: Path, node: str | None = None, **seconds: float) -> None:
     path = folder / JOB_FILE
     record = json.loads(path.read_text()) if path.is_file() else {}
     for key, value in seconds.items():
-        record[key] = round(record.get(key, 0.0) + value, 1)
+        record[key] = round(record.get(key, 0.0) + value, 3)  # (a tenth would lose short pieces)
     if node is not None:
         record["node"] = node
     else:
