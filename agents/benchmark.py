@@ -231,10 +231,8 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
         return folder
     folder.mkdir(parents=True, exist_ok=True)
     if not method.trained:
-        evaluation_started = time.monotonic()
-        evaluate(policy=method.baseline, env=method.env_id, episodes=settings.episodes,
-                 out=folder / PROTOCOL_EVAL, protocol=True)  # fmt: skip
-        _log_job(folder, evaluate_seconds=time.monotonic() - evaluation_started)
+        _evaluate_job(folder, settings, folder / PROTOCOL_EVAL, policy=method.baseline,
+                      env=method.env_id)  # fmt: skip
         return folder
     from agents.train import start, train
 
@@ -252,10 +250,16 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
             train(config, run, resume=resume, progress_bar=False)
         finally:  # a stopped job's minutes count in the run's, which goes on from its checkpoint
             _log_job(folder, train_seconds=time.monotonic() - training_started)
-    evaluation_started = time.monotonic()
-    evaluate(model_path=run, episodes=settings.episodes, out=run / PROTOCOL_EVAL, protocol=True)
-    _log_job(folder, evaluate_seconds=time.monotonic() - evaluation_started)
+    _evaluate_job(folder, settings, run / PROTOCOL_EVAL, model_path=run)
     return folder
+
+
+def _evaluate_job(folder: Path, settings: Settings, out: Path, **agent: Any) -> None:
+    """Play the protocol's games with ``agent`` (evaluate's policy/env or model_path) into
+    ``out``, timed in the job's record."""
+    started = time.monotonic()
+    evaluate(episodes=settings.episodes, out=out, protocol=True, **agent)
+    _log_job(folder, evaluate_seconds=time.monotonic() - started)
 
 
 def _log_job(folder: Path, node: str | None = None, **seconds: float) -> None:
