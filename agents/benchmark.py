@@ -117,7 +117,6 @@ METHODS: dict[str, Method] = {
     "ppo-finetune-v1": Method("Pinball-v1", "ppo_finetune_v1.yaml", tiny=_TINY_PPO),
     "ppo-steady-v1": Method("Pinball-v1", "ppo_steady_v1.yaml", tiny=_TINY_PPO),
     "ppo-gentle-v1": Method("Pinball-v1", "ppo_gentle_v1.yaml", tiny=_TINY_PPO),
-    "ppo-horizon-v1": Method("Pinball-v1", "ppo_horizon_v1.yaml", tiny=_TINY_PPO),
     "a2c-v1": Method("Pinball-v1", "a2c_v1.yaml", tiny=(*_TINY, "hyperparams.n_steps=8")),
     "dqn-v1": Method(
         "Pinball-v1",
