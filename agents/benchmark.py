@@ -117,6 +117,8 @@ METHODS: dict[str, Method] = {
     "ppo-finetune-v1": Method("Pinball-v1", "ppo_finetune_v1.yaml", tiny=_TINY_PPO),
     "ppo-steady-v1": Method("Pinball-v1", "ppo_steady_v1.yaml", tiny=_TINY_PPO),
     "ppo-gentle-v1": Method("Pinball-v1", "ppo_gentle_v1.yaml", tiny=_TINY_PPO),
+    "ppo-close-v1": Method("Pinball-v1", "ppo_close_v1.yaml", tiny=_TINY_PPO),
+    "ppo-broad-v1": Method("Pinball-v1", "ppo_broad_v1.yaml", tiny=_TINY_PPO),
     "a2c-v1": Method("Pinball-v1", "a2c_v1.yaml", tiny=(*_TINY, "hyperparams.n_steps=8")),
     "dqn-v1": Method(
         "Pinball-v1",
