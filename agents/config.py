@@ -122,6 +122,10 @@ class TrainConfig(_RunConfig):
     imitation_learning_rate: float | None = None
     """The warm start's learning rate (None: the algorithm's first learning rate), so that a
     gentle fine-tuning rate does not also weaken the fit."""
+    anchor_coef: float = 0.0
+    """With a warm start: the weight of the pull back towards it after each update, a pass over
+    the update's states lowering KL(warm start || policy) (``agents.imitation.Anchor``; 0:
+    none). A resume takes the warm start from the run's ``checkpoints/step_0.zip``."""
     validate_every: int = 0
     """Every this many env steps, and at the end (0: never), the model plays
     ``validate_episodes`` whole games from ``validate_seed`` on, deterministically; the best of
@@ -431,6 +435,11 @@ def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> N
     rate = config.imitation_learning_rate
     if rate is not None and not _positive(rate):
         fail("imitation_learning_rate", f"must be a positive number or null, not {rate!r}")
+    anchor = config.anchor_coef
+    if anchor != 0 and not _positive(anchor):
+        fail("anchor_coef", f"must be a number >= 0, not {anchor!r}")
+    if anchor and not config.imitation_steps:
+        fail("anchor_coef", "pulls towards a warm start: set imitation_steps too")
     if not config.imitation_steps:
         return
     if config.algo not in ("ppo", "a2c"):

@@ -11,8 +11,17 @@ as the algorithm will see them), ``imitation_epochs`` passes in minibatches at
 
 The heuristic is the bar the agent has to beat: copying it is where learning starts, not
 the result; the evaluation plays the learned policy alone.
+
+With ``anchor_coef`` > 0, :class:`Anchor` keeps the learner near that start: after each update,
+one pass over the states of the rollout the update learned from lowers ``anchor_coef`` times
+KL(warm start || policy), the warm start's action distribution against the policy's. Fine-tuning
+from a copy forgets what the copy knew on states the gradient says little about (Wolczyk et al.
+2024, "Fine-tuning reinforcement learning models is secretly a forgetting mitigation problem");
+the pull is proportional to how far the policy has gone, so a drift of little evidence is undone
+while a steady advantage still moves it.
 """
 
+import copy
 import time
 from typing import Any
 
@@ -130,3 +139,72 @@ def imitate(
         "value_loss": float(torch.mean((values - returns_t) ** 2)),
         "seconds": time.monotonic() - start,
     }
+
+
+class Anchor:
+    """The pull towards the warm start (see the module's docstring) of an actor-critic with
+    discrete actions. ``reference`` is the warm start's policy (a frozen copy is kept);
+    :meth:`remember` takes a rollout's states, :meth:`pull` fits the model's policy to the
+    reference's actions on them, one pass in minibatches of ``batch_size``, with the policy's
+    own optimizer at its current rate (so the pull decays with the algorithm's schedule)."""
+
+    def __init__(self, reference: Any, coef: float, batch_size: int, seed: int,
+                 max_grad_norm: float = 0.5) -> None:  # fmt: skip
+        self.reference = copy.deepcopy(reference)
+        self.reference.set_training_mode(False)
+        for parameter in self.reference.parameters():
+            parameter.requires_grad_(False)
+        self.coef, self.batch_size, self.max_grad_norm = coef, batch_size, max_grad_norm
+        self.rng = np.random.default_rng(seed)
+        self.states: Any = None
+
+    def remember(self, observations: np.ndarray) -> None:
+        """The states of a rollout, ``(steps, envs, *shape)`` as the rollout buffer holds them."""
+        self.states = np.array(observations, dtype=np.float32).reshape(-1, *observations.shape[2:])
+
+    def divergence(self, policy: Any, states: Any = None) -> float:
+        """The mean KL(warm start || ``policy``) over ``states`` (default: those remembered)."""
+        import torch
+
+        states = self._tensor(policy, self.states if states is None else states)
+        with torch.no_grad():
+            return float(self._kl(policy, states, self._log_probs(self.reference, states)))
+
+    def pull(self, policy: Any) -> float | None:
+        """One pass of the pull over the remembered states (then forgotten); returns the mean
+        KL before it, or None with no states remembered."""
+        import torch
+
+        if self.states is None:
+            return None
+        states = self._tensor(policy, self.states)
+        self.states = None
+        with torch.no_grad():
+            reference = self._log_probs(self.reference, states)
+            before = float(self._kl(policy, states, reference))
+        policy.set_training_mode(True)
+        order = torch.as_tensor(self.rng.permutation(len(states)), device=policy.device)
+        for first in range(0, len(order), self.batch_size):
+            batch = order[first : first + self.batch_size]
+            loss = self.coef * self._kl(policy, states[batch], reference[batch])
+            policy.optimizer.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(policy.parameters(), self.max_grad_norm)
+            policy.optimizer.step()
+        policy.set_training_mode(False)
+        return before
+
+    @staticmethod
+    def _tensor(policy: Any, states: np.ndarray) -> Any:
+        import torch
+
+        return torch.as_tensor(states, dtype=torch.float32, device=policy.device)
+
+    @staticmethod
+    def _log_probs(policy: Any, states: Any) -> Any:
+        return policy.get_distribution(states).distribution.logits  # (normalised log-probs)
+
+    @classmethod
+    def _kl(cls, policy: Any, states: Any, reference: Any) -> Any:
+        log_probs = cls._log_probs(policy, states)
+        return (reference.exp() * (reference - log_probs)).sum(dim=1).mean()

@@ -15,7 +15,9 @@ after ``max_minutes`` of wall time (the progress bar's remaining time counts to 
 first) or at ``total_frames`` frames played (the benchmark protocol's budget). SIGINT (Ctrl-C)
 or SIGTERM saves a checkpoint with the normalisation statistics and prints it and the resume
 command; in the warm start it saves nothing (a checkpoint would skip the rest of the warm start
-for good), and a run without a checkpoint is trained again from the start when resumed. With
+for good), and a run without a checkpoint is trained again from the start when resumed. A
+finished warm start is checkpointed as ``checkpoints/step_0.zip`` (whatever ``checkpoint_every``
+says): a resume goes on from it without playing and fitting it again. With
 ``validate_every``, the model plays the validation games (``validate_seed`` on) every that many
 steps and at the end; the scores go to ``validation.csv``, the best model so far to
 ``best_model.zip``, and the best of all becomes ``model.zip`` (the last one stays in
@@ -39,7 +41,7 @@ import numpy as np
 from agents.cli import run_training, training_parser
 from agents.config import ConfigError, TrainConfig, algorithm_class, sb3_hyperparams
 from agents.envs import FrameCounter, make_env
-from agents.imitation import imitate
+from agents.imitation import Anchor, imitate
 from agents.rollouts import model_policy, rollouts, summarize
 from agents.runs import (
     CHECKPOINTS,
@@ -62,6 +64,7 @@ from agents.runs import (
 )
 
 BEST_MODEL = "best_model"
+WARM_START = "step_0"  # the checkpoint of a finished warm start
 MODEL_NAME = Path(MODEL_FILE).stem  # model.zip, model_vecnormalize.pkl
 
 
@@ -133,9 +136,12 @@ def make_callback(
     validation: Validation | None = None,
     stop: StopRequest | None = None,
     progress_bar: bool = False,
+    anchor: Anchor | None = None,
 ) -> Any:
     """Checkpoints every ``checkpoint_every`` env steps, ``validation`` every
-    ``validate_every`` (its score logged as ``validation/score_mean``), the mean game score of
+    ``validate_every`` (its score logged as ``validation/score_mean``), ``anchor``'s pull after
+    each update (on the rollout it learned from: taken at its end, pulled at the next start; the
+    KL before the pull logged as ``anchor/kl``), the mean game score of
     the last 100 training games logged as ``rollout/ep_score_mean`` (the score, not the shaped
     return), the frames played by all envs as ``time/frames`` (counted on from ``frames``), the
     stop at ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning
@@ -160,6 +166,11 @@ def make_callback(
         def _on_training_end(self) -> None:
             self.bar.close()
 
+        def _on_rollout_start(self) -> None:  # (the update of the last rollout is done)
+            kl = anchor.pull(self.model.policy) if anchor else None
+            if kl is not None:
+                self.logger.record("anchor/kl", kl)
+
         def _on_step(self) -> bool:
             dones, infos = self.locals["dones"], self.locals["infos"]
             self.counter.update(dones, infos)
@@ -179,6 +190,8 @@ def make_callback(
             return not stop and (not config.max_minutes or time.monotonic() < self.deadline)
 
         def _on_rollout_end(self) -> None:
+            if anchor:
+                anchor.remember(self.model.rollout_buffer.observations)
             self.logger.record("time/frames", self.counter.frames)
             if self.scores:
                 self.logger.record("rollout/ep_score_mean", float(np.mean(self.scores)))
@@ -227,8 +240,15 @@ def _train(
         if stop:  # cut short: a checkpoint now would skip the rest of it on resume
             venv.close()
             raise TrainingInterrupted(run, None, 0, stop, "agents.train")
+        save_model(model, run / CHECKPOINTS, WARM_START, config)
+        record_trained(run, 0, frames)
+    try:
+        anchor = _anchor(config, run, model)
+    except ConfigError:
+        venv.close()
+        raise
     validation = Validation(config, run) if config.validate_every else None
-    callback = make_callback(config, run, frames, started, validation, stop, progress_bar)
+    callback = make_callback(config, run, frames, started, validation, stop, progress_bar, anchor)
     left = config.total_timesteps - model.num_timesteps
     if left > 0 and not stop:
         model.learn(left, callback=callback, reset_num_timesteps=not resume)
@@ -282,7 +302,24 @@ def _model(
     model = algorithm.load(path, env=venv, device=config.device)
     if hasattr(model, "replay_buffer"):  # checkpoints hold no buffer: refill it first
         model.learning_starts += model.num_timesteps
-    return venv, model, keep_progress(run)
+    # (a resume from the warm start's checkpoint has logged no rollout: meta.json has its frames)
+    return venv, model, max(keep_progress(run), trained_frames(run))
+
+
+def _anchor(config: TrainConfig, run: Path, model: Any) -> Anchor | None:
+    """The pull towards the warm start (``anchor_coef``; None without one): the model's policy
+    before it has learned (just fitted, or resumed from the warm start's checkpoint), else the
+    warm start's checkpoint's."""
+    if not config.anchor_coef:
+        return None
+    reference = model.policy
+    if model.num_timesteps:
+        path = run / CHECKPOINTS / f"{WARM_START}.zip"
+        if not path.is_file():
+            raise ConfigError(f"{run}: anchor_coef needs the warm start's checkpoint {path}")
+        reference = algorithm_class(config.algo).load(path, device=config.device).policy
+    batch_size = getattr(model, "batch_size", None) or model.n_steps * model.n_envs
+    return Anchor(reference, config.anchor_coef, batch_size, config.seed, model.max_grad_norm)
 
 
 def clear_training_logs(run: Path) -> None:
@@ -291,6 +328,13 @@ def clear_training_logs(run: Path) -> None:
     logged = ["progress*.csv", VALIDATION_FILE, f"{BEST_MODEL}*", "events.out.tfevents.*"]
     for path in [path for pattern in logged for path in run.glob(pattern)]:
         path.unlink()
+
+
+def trained_frames(run: Path) -> int:
+    """The frames ``meta.json`` says were played (``trained``; 0 without it)."""
+    meta_path = run / "meta.json"
+    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    return int(meta.get("trained", {}).get("frames", 0))
 
 
 def record_trained(run: Path, steps: int, frames: int) -> None:

@@ -3,6 +3,7 @@ checkpoints, config errors, deterministic evaluation, and rl-zoo3's hyperparamet
 
 import csv
 import dataclasses
+import itertools
 import json
 import subprocess
 import sys
@@ -246,6 +247,9 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["imitation_steps=100", "algo=dqn", "hyperparams={}"], "needs an actor-critic"),
         (["imitation_steps=100", "env.kwargs.action_type=multibinary"], "needs discrete actions"),
         (["imitation_steps=100", "env.frame_stack=2"], "needs state observations"),
+        (["anchor_coef=-1"], "anchor_coef: must be a number >= 0"),
+        (["anchor_coef=nan", "imitation_steps=100"], "anchor_coef: must be a number >= 0"),
+        (["anchor_coef=0.5", "imitation_steps=0"], "anchor_coef: pulls towards a warm start"),
         (["validate_every=-1"], "validate_every: must be an integer >= 0"),
         (["validate_every=9", "validate_episodes=0"], "validate_episodes: must be an integer >= 1"),
         (["validate_every=9", "validate_seed=31"], "validate_seed: 31 overlaps the training seeds"),
@@ -501,6 +505,80 @@ def test_the_warm_start_fits_at_its_own_learning_rate():
         moves.append(max(float((p - q).abs().max()) for p, q in zip(after, before, strict=True)))
         assert model.policy.optimizer.param_groups[0]["lr"] == pytest.approx(3e-4)  # restored
     assert moves[0] > 1e-4 and moves[1] < 1e-20
+
+
+def test_the_anchor_pulls_a_drifted_policy_back_to_its_warm_start():
+    """Anchor: KL(warm start || policy) is 0 at the start, and each pull over a rollout's
+    states lowers it; the warm start it keeps is a frozen copy."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from agents.imitation import Anchor
+
+    config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])
+    venv = make_env(config)
+    model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
+    anchor = Anchor(model.policy, coef=1.0, batch_size=64, seed=0)
+    frozen = [p.detach().clone() for p in anchor.reference.parameters()]
+    venv.reset()
+    actions = [np.array([venv.action_space.sample()] * 4) for _ in range(64)]
+    rollout = np.stack([venv.step(action)[0] for action in actions])  # (steps, envs, features)
+    anchor.remember(rollout)
+    assert anchor.divergence(model.policy) == pytest.approx(0.0, abs=1e-6)
+    with torch.no_grad():  # the drift: the action head's weights pushed at random
+        for parameter in model.policy.action_net.parameters():
+            parameter.add_(torch.randn_like(parameter))
+    divergences = [anchor.divergence(model.policy)]
+    for _ in range(5):
+        anchor.remember(rollout)
+        assert anchor.pull(model.policy) == pytest.approx(divergences[-1], rel=1e-5)
+        divergences.append(anchor.divergence(model.policy, rollout.reshape(-1, rollout.shape[2])))
+    assert divergences[0] > 0.05
+    assert all(later < earlier for earlier, later in itertools.pairwise(divergences))
+    assert divergences[-1] < divergences[0] / 2
+    assert anchor.pull(model.policy) is None  # (the states are forgotten once pulled on)
+    kept = zip(anchor.reference.parameters(), frozen, strict=True)
+    assert all(torch.equal(now, before) for now, before in kept)
+
+
+def test_a_warm_start_is_checkpointed_and_an_anchored_run_resumes_from_it(tmp_path, monkeypatch):
+    """A finished warm start is checkpoint step_0 with its frames: a run killed after it goes on
+    from there without fitting again, its frames counted on; with anchor_coef, the pull's KL is
+    logged and a resume takes the warm start from that checkpoint."""
+    config = ROOT / "configs/agents/ppo.yaml"
+    run = tiny_run(config, tmp_path / "runs", "imitation_steps=64", "anchor_coef=1.0")
+    assert (run / "checkpoints/step_0.zip").is_file()
+    with open(run / "progress.csv") as file:
+        rows = list(csv.DictReader(file))
+    warm_frames = int(float(rows[0]["imitation/frames"]))
+    kls = [float(row["anchor/kl"]) for row in rows if row.get("anchor/kl")]
+    assert kls and all(np.isfinite(kl) and kl >= 0 for kl in kls)
+    # The run as a kill right after its warm start leaves it: step_0 and the frames it played.
+    for path in [*run.glob("model*"), *run.glob("progress*.csv"), run / "validation.csv"]:
+        path.unlink(missing_ok=True)
+    for path in (run / "checkpoints").glob("step_*"):
+        if not path.name.startswith("step_0.") and not path.name.startswith("step_0_"):
+            path.unlink()
+    meta = json.loads((run / "meta.json").read_text())
+    meta["trained"] = {"steps": 0, "frames": warm_frames}
+    (run / "meta.json").write_text(json.dumps(meta))
+
+    def no_second_fit(*args, **kwargs):
+        raise AssertionError("the warm start was fitted again")
+
+    monkeypatch.setattr("agents.train.imitate", no_second_fit)
+    train.main(["--resume", str(run), "--no-progress"])
+    assert latest_checkpoint(run)[0] >= 256
+    with open(run / "progress.csv") as file:
+        frames = [int(float(row["time/frames"])) for row in csv.DictReader(file)]
+    assert frames[0] > warm_frames  # counted on from the warm start's
+    # A resume past step 0 takes the warm start from its checkpoint, and needs it.
+    train.main(["--resume", str(run), "total_timesteps=512", "--no-progress"])
+    assert latest_checkpoint(run)[0] >= 512  # (model.zip is the best validated)
+    for path in (run / "checkpoints").glob("step_0*"):
+        path.unlink()
+    with pytest.raises(ConfigError, match="anchor_coef needs the warm start's checkpoint"):
+        train.train(load_config(run / "config.yaml", ["total_timesteps=1024"]), run, resume=True)
 
 
 def start_training(

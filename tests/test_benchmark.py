@@ -2,6 +2,7 @@
 protocol."""
 
 import csv
+import dataclasses
 import json
 import shutil
 import time
@@ -14,12 +15,14 @@ import yaml
 
 import agents.train
 from agents import benchmark
-from agents.config import ConfigError
+from agents.config import ConfigError, load_config
 from agents.evaluate import main as evaluate_main
 from agents.policy import load_policy
 from agents.runs import MODEL_FILE
 from pinball_env import protocol
 from pinball_env.tools import play
+
+ROOT = Path(__file__).resolve().parent.parent
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -337,3 +340,11 @@ def test_the_protocol_evaluation_plays_sticky_held_out_games(tmp_path):
             done = terminated or truncated
         assert info["score"] == score
     assert summary["protocol"]["score_mean"] == np.mean(scores)
+
+
+def test_a_key_added_later_leaves_the_digest_of_configs_at_its_default():
+    config = load_config(ROOT / "configs/agents/ppo_close_v1.yaml")
+    assert set(benchmark.LATER_KEYS) <= set(config.to_dict())
+    anchored = dataclasses.replace(config, anchor_coef=1.0)
+    assert "anchor_coef" not in benchmark._trained_by(config)
+    assert benchmark.config_digest(anchored) != benchmark.config_digest(config)
