@@ -75,6 +75,7 @@ from agents.runs import (
     best_validation,
     latest_checkpoint,
     progress_rows,
+    read_meta,
     source_commit,
     validation_rows,
 )
@@ -488,7 +489,7 @@ def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
     """A run's frames and steps trained, its minutes of training (the job's record, or for a run
     trained outside the benchmark, from its start to its model), its best validation score (its
     model's), its commit and its config's digest."""
-    meta = json.loads((run / "meta.json").read_text())
+    meta = read_meta(run)
     rows = progress_rows(run)  # (a run from before meta.json's "trained": its last rollout's)
     trained = meta.get("trained") or {
         "frames": max((int(float(row["time/frames"])) for row in rows if row.get("time/frames")),

@@ -32,6 +32,7 @@ from typing import Any
 from agents.config import AnyConfig, ConfigError, RllibConfig, TrainConfig, load_config, save_config
 
 CONFIG_FILE = "config.yaml"
+META_FILE = "meta.json"
 MODEL_FILE = "model.zip"
 STATS_FILE = "vecnormalize.pkl"
 CHECKPOINTS = "checkpoints"
@@ -172,7 +173,7 @@ def start_run(config: AnyConfig, runs: Path, command: list[str], libraries: list
         "command": command,
         "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
     }
-    (run / "meta.json").write_text(json.dumps(meta, indent=1))
+    write_meta(run, meta)
     return run
 
 
@@ -223,14 +224,24 @@ def extend_run(run: Path, overrides: list[str], kind: type, command: list[str]) 
     config = load_config(run / CONFIG_FILE, overrides, kind=kind)
     if overrides:
         save_config(config, run / CONFIG_FILE)
-    meta_path = run / "meta.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    meta = read_meta(run)
     meta.setdefault("resumes", []).append(
         {"command": command, "overrides": list(overrides),
          "started": time.strftime("%Y-%m-%dT%H:%M:%S")}
     )  # fmt: skip
-    meta_path.write_text(json.dumps(meta, indent=1))
+    write_meta(run, meta)
     return config
+
+
+def read_meta(run: Path) -> dict[str, Any]:
+    """The run's ``meta.json`` (empty for a folder without one)."""
+    path = run / META_FILE
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def write_meta(run: Path, meta: dict[str, Any]) -> None:
+    """Replace the run's ``meta.json`` with ``meta``, atomically."""
+    atomic_write(run / META_FILE, lambda file: file.write(json.dumps(meta, indent=1).encode()))
 
 
 def atomic_write(path: Path, write: Callable[[Any], None]) -> None:

@@ -31,7 +31,6 @@ import collections
 import copy
 import csv
 import io
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -56,11 +55,13 @@ from agents.runs import (
     keep_progress,
     latest_checkpoint,
     next_multiple,
+    read_meta,
     save_model,
     start_run,
     stats_for,
     stopped_before_learning,
     validation_rows,
+    write_meta,
 )
 
 BEST_MODEL = "best_model"
@@ -332,17 +333,12 @@ def clear_training_logs(run: Path) -> None:
 
 def trained_frames(run: Path) -> int:
     """The frames ``meta.json`` says were played (``trained``; 0 without it)."""
-    meta_path = run / "meta.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
-    return int(meta.get("trained", {}).get("frames", 0))
+    return int(read_meta(run).get("trained", {}).get("frames", 0))
 
 
 def record_trained(run: Path, steps: int, frames: int) -> None:
     """Write where training stopped, env steps and frames, into ``meta.json`` (``trained``)."""
-    meta_path = run / "meta.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
-    meta["trained"] = {"steps": int(steps), "frames": int(frames)}
-    atomic_write(meta_path, lambda file: file.write(json.dumps(meta, indent=1).encode()))
+    write_meta(run, {**read_meta(run), "trained": {"steps": int(steps), "frames": int(frames)}})
 
 
 def warm_start(model: Any, venv: Any, config: TrainConfig, stop: StopRequest) -> int:
