@@ -11,7 +11,7 @@ As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggre
   frame from each game's own random stream, so that no evaluation is a sequence an agent could
   learn by heart.
 - **Training**: :data:`TRAINING_FRAMES` frames per run (all envs' frames, a warm start's
-  included: what the shipped PPO trains in about 30 minutes on 2 cores), :data:`TRAINING_SEEDS`
+  included: what the shipped PPO trains in 38 minutes alone on 2 cores), :data:`TRAINING_SEEDS`
   (at least 5 per method); training never plays a held-out game.
 - **Evaluation**: every run plays the :data:`EVAL_SEEDS` games (held out: seeds 100000-100099),
   its policy deterministic.
@@ -46,8 +46,8 @@ GAME_OPTIONS: dict[str, Any] = {"balls": 3, "max_frames": 7200, "physics": "swep
 # the protocol's whatever an agent trained with.
 FIXED_OPTIONS = ("table", "balls", "max_frames", "physics", "max_episode_steps")
 # A training run's budget: frames summed over its envs, a warm start's included
-# (``total_frames`` of a training config). The shipped PPO trains this in about 28 minutes on a
-# 2-core machine (configs/agents/ppo_v1.yaml: 20.5M frames in 28 minutes).
+# (``total_frames`` of a training config). The shipped PPO trains this in 38 minutes alone on a
+# 2-core machine (configs/agents/ppo_gentle_v1.yaml, seed 3: 37.8 minutes).
 TRAINING_FRAMES = 20_000_000
 # The training seeds of every method (its config's ``seed``): at least 5.
 TRAINING_SEEDS = (0, 1, 2, 3, 4)
