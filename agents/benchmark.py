@@ -110,6 +110,8 @@ _TINY_PPO = (*_TINY, "hyperparams.n_steps=64", "hyperparams.batch_size=64",
              "hyperparams.n_epochs=1")  # fmt: skip
 
 METHODS: dict[str, Method] = {
+    "random-v2": Method("Pinball-v2", baseline="random"),
+    "heuristic-v2": Method("Pinball-v2", baseline="heuristic"),
     "random-v1": Method("Pinball-v1", baseline="random"),
     "heuristic-v1": Method("Pinball-v1", baseline="heuristic"),
     "ppo-v1": Method("Pinball-v1", "ppo_v1.yaml", tiny=_TINY_PPO),
@@ -439,9 +441,9 @@ def method_results(
             **metrics, "runs": runs}  # fmt: skip
 
 
-# What of the protocol a run's scores depend on: a merged run was measured under the same.
-SCORED_UNDER = ("env_ids", "repeat_action_probability", "game", "training_frames", "eval_seeds",
-                "tiny")  # fmt: skip
+# What of the protocol a run's scores depend on: a merged run was measured under the same (and
+# on an env the protocol still has: a protocol may gain envs, as it gained Pinball-v2).
+SCORED_UNDER = ("repeat_action_probability", "game", "training_frames", "eval_seeds", "tiny")
 
 
 def merged_runs(paths: list[Path], names: list[str], settings: Settings) -> Merged:
@@ -458,6 +460,8 @@ def merged_runs(paths: list[Path], names: list[str], settings: Settings) -> Merg
         except (OSError, ValueError, KeyError, TypeError) as error:
             raise ConfigError(f"--merge {path}: not a benchmark.json ({error})") from None
         differ = [key for key in SCORED_UNDER if theirs.get(key) != ours[key]]
+        if not set(theirs.get("env_ids", ())) <= set(ours["env_ids"]):
+            differ.append("env_ids")
         if differ:
             raise ConfigError(
                 f"--merge {path}: measured under another protocol than this benchmark's ("

@@ -2,8 +2,9 @@
 
 Importing the package registers ``Pinball-v0`` (the classic table, or any other),
 ``Pinball-v1`` (the whole cabinet: the player's plunger, the nudge and the tilt, on
-``classic_v1``) and ``PinballProcgen-v0`` (a generated table each game, the table source
-``"generated"``) with Gymnasium::
+``classic_v1``), ``Pinball-v2`` (v1's game with a tilt that any sustained nudging trips, on
+``classic_v2``: the protocol's env) and ``PinballProcgen-v0`` (a generated table each game,
+the table source ``"generated"``) with Gymnasium::
 
     import gymnasium as gym
     import pinball_env  # noqa: F401
@@ -39,6 +40,16 @@ register(
     vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"table": "classic_v1"},
+)
+
+# Pinball-v1's game with a tilt that any sustained nudging trips (v1's ignores one-way nudging):
+# the protocol's env.
+register(
+    id="Pinball-v2",
+    entry_point="pinball_env.env:PinballEnv",
+    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    max_episode_steps=MAX_EPISODE_STEPS,
+    kwargs={"table": "classic_v2"},
 )
 
 # The same envs on a generated table each game (the table source "generated").

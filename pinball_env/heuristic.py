@@ -193,7 +193,10 @@ class HeuristicPolicy:
     apex; one falling onto the post's apex from the outlane's side, less than ``post_reach``
     from it, is nudged outwards (the post moves under it). A nudge is given only if the plumb
     bob, predicted from its own nudges (:func:`bob_response`), stays inside ``tilt_margin`` of
-    the tilt ring, and never while a tilt warning stands: it never warns, let alone tilts.
+    the tilt ring, and never while a tilt warning stands: it never warns, let alone tilts. Where
+    one shove from rest already swings the bob onto the ring (``Pinball-v2``'s tight bob), every
+    nudge is a warning: it nudges only while none stands, so that one warning at most ever
+    stands and it never tilts.
     The nudge's rules come from the kernel's answers to each nudge, or none, of the balls near
     the outlanes in Pinball-v0 games (seeds 2000-2127), its numbers from Pinball-v1 games with
     the machine's plunges (seeds 0-255).
@@ -250,7 +253,10 @@ class HeuristicPolicy:
             self._release = pulls[skill_shot_frames(table) - 1] - 0.5 * pulls[0]
             self._outlanes = Outlane.of(table)
             self._bob = bob_response(table)
-            self._ring = tilt_margin * math.radians(table.tilt.ring_angle)
+            ring = math.radians(table.tilt.ring_angle)
+            self._ring = tilt_margin * ring
+            # The kernel's bob stops at the ring: a response that reaches it is a touch.
+            self._shove_warns = bool(np.abs(self._bob).max() >= ring * (1.0 - 1e-9))
             self._nudge_frames = max(1, round(table.cabinet.nudge_interval * rate))
             names = button_names(cabinet=True)
             self._nudge_buttons = {
@@ -323,7 +329,7 @@ class HeuristicPolicy:
         if self._shoves and frame < self._shoves[-1][0]:
             self._shoves = []  # a new game (without reset): the cabinet is at rest again
         if info["tilt_warnings"] or info.get("tilted", False):
-            return pressed  # a warning means its model of the bob is off: nudge no more
+            return pressed  # a warning stands (or its model of the bob is off): no nudge
         x, y = map(float, info["ball_position"])
         vx, vy = map(float, info["ball_velocity"])
         direction = self._outlane_nudge(x, y, vx, vy)
@@ -360,6 +366,8 @@ class HeuristicPolicy:
         ring), over the response's length."""
         if self._shoves and frame - self._shoves[-1][0] < self._nudge_frames:
             return False  # the game would ignore it
+        if self._shove_warns:
+            return True  # a warning, taken only while none stands (see cabinet_buttons)
         substeps = self.table.simulation.substeps
         n = len(self._bob)
         self._shoves = [s for s in self._shoves if (frame - s[0]) * substeps < n]

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 # The envs of the protocol: the whole cabinet first, the flippers-only game for continuity.
-ENV_IDS = ("Pinball-v1", "Pinball-v0")
+ENV_IDS = ("Pinball-v2", "Pinball-v1", "Pinball-v0")
 # ALE v5's sticky actions: each frame repeats the last one's buttons with this probability.
 REPEAT_ACTION_PROBABILITY = 0.25
 # The game every protocol evaluation plays, whatever the agent's own options: its table (the
@@ -67,6 +67,7 @@ PROFILE_TAUS = np.linspace(-0.5, 2.5, 121)
 # random-v0 heuristic-v0`` (benchmark.json, "reference_measured"); fixed here so that every
 # paper normalises alike.
 REFERENCE_SCORES: dict[str, dict[str, float]] = {
+    "Pinball-v2": {"random": 3.8, "heuristic": 49423.4},
     "Pinball-v1": {"random": 6402.7, "heuristic": 53590.7},
     "Pinball-v0": {"random": 4140.6, "heuristic": 6392.2},
 }

@@ -82,7 +82,7 @@ def test_checkers_pass_without_warnings(obs_type, action_type, physics):
         kwargs |= {"frame_skip": 4, "drain_penalty": 1.0, "height_shaping": 0.5}
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        # Gymnasium's registry notice that Pinball-v1 exists, not a warning about the env.
+        # Gymnasium's registry notice that a newer version exists, not a warning about the env.
         warnings.filterwarnings("ignore", V0_NOTICE, DeprecationWarning)
         env = gym.make("Pinball-v0", render_mode="rgb_array", **kwargs)
         check_env(env.unwrapped)

@@ -606,7 +606,7 @@ def test_a_recording_from_before_the_cabinet_replays_and_writes_back_the_same(tm
     assert (tmp_path / "again.json").read_text() == text
 
 
-def test_the_command_line_plays_pinball_v1(tmp_path, monkeypatch, capsys):
+def test_the_command_line_plays_pinball_v1_and_the_protocols_v2(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(play, "has_display", lambda: True)  # SDL's dummy driver shows it
     monkeypatch.setattr(play.PlayLoop, "run", lambda loop: play.PlayLoop.tick(loop))
     scores = play.main(["--env", "Pinball-v1", "--seed", "2", "--record", str(tmp_path / "r.json")])
@@ -623,4 +623,9 @@ def test_the_command_line_plays_pinball_v1(tmp_path, monkeypatch, capsys):
     with pytest.raises(SystemExit):  # argparse: the recording says which env
         play.main(["--replay", str(tmp_path / "r.json"), "--env", "Pinball-v1"])
     with pytest.raises(SystemExit):  # argparse: no such env
-        play.main(["--env", "Pinball-v2"])
+        play.main(["--env", "Pinball-v9"])
+    # --protocol plays the protocol's env, Pinball-v2, with its sticky actions.
+    play.main(["--protocol", "--seed", "3", "--record", str(tmp_path / "p.json")])
+    data = json.loads((tmp_path / "p.json").read_text())
+    assert data["env_id"] == "Pinball-v2" and data["options"]["table"] == "classic_v2"
+    assert data["options"]["repeat_action_probability"] == 0.25

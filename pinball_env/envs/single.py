@@ -42,8 +42,8 @@ class PinballEnv(CoreAttributes, gym.Env):
     A button acts for the whole step (one frame, 1/60 s, or ``frame_skip`` frames): held, the
     flipper swings up to its stop and stays there; released, it falls back to rest.
 
-    **The whole cabinet** (``Pinball-v1``, a table with ``cabinet`` and ``tilt`` sections and
-    the player's plunger): ``Discrete(32)``, as ALE names its actions
+    **The whole cabinet** (``Pinball-v1`` and ``-v2``, a table with ``cabinet`` and ``tilt``
+    sections and the player's plunger): ``Discrete(32)``, as ALE names its actions
     (:meth:`get_action_meanings`). Action ``a`` holds the flippers ``a & 3`` as above, the
     plunger if ``a & 4``, and the nudge ``a >> 3``:
 
@@ -186,7 +186,13 @@ class PinballEnv(CoreAttributes, gym.Env):
     tilts the machine: the flippers and kickers go dead, nothing scores, the ball is lost
     (at once if it waits on the plunger; else where it drains, or where it lies still for 10
     s) and play goes on with the next ball, the tilt and the warnings cleared. One nudge swings
-    the bob about 2.5 degrees; nudges left and right in a rhythm build its swing up.
+    the bob about 2.5 degrees; nudges left and right in a rhythm build its swing up. **v1's
+    tilt ignores one-way nudging**: shoves in one direction, even four a second, never reach
+    its ring. ``Pinball-v2`` (``classic_v2``: v1's table with the ring at 1 degree, Visual
+    Pinball X's default, and ``settle_time`` 1 s) is the one to use: there a firm shove swings
+    the bob onto its ring whatever it was doing, so every nudge is a warning (touches within
+    1 s of one are that one), and any sustained nudging, one way or alternating, tilts the
+    machine within about two seconds; a single nudge, or one every 10 s, never does.
     ``info`` adds ``tilt_warnings``, ``tilted`` (the machine is tilted, or tilted in this
     step), ``ball_on_plunger``, ``plunger_pull`` [m], ``cabinet_offset`` [m] and ``skill_shot``
     (made in this step).
@@ -300,6 +306,8 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     ## Version History
 
+    - v2: v1's game with a tilt that any sustained nudging trips (``classic_v2``: the ring at
+      1 degree, ``settle_time`` 1 s): every nudge is a warning. The benchmark protocol's env.
     - v1: the whole cabinet on ``classic_v1`` (the classic layout): the player's plunger and a
       skill shot, the nudge, the plumb-bob tilt; 32 actions. Then rules and targets on
       ``classic_v1`` (top lanes with lane change and the bonus multiplier, a drop bank, a

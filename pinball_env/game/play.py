@@ -53,6 +53,7 @@ class Rules(NamedTuple):
     nudge_frames: int  # shortest time between two shoves [frames]
     warnings: int  # ring touches that warn; the next tilts
     warning_frames: int  # a warning is forgotten after this long without another [frames]
+    settle_frames: int  # touches this soon after a warning are that warning [frames] (0: none)
     skill_sensors: np.ndarray  # (N,) int64: element id of the skill-shot rollover (-1: none)
     skill_bonus: int  # [points]
     skill_frames: int  # how long the skill shot stays lit after a plunge [frames]
@@ -358,7 +359,8 @@ def cabinet_rules(
     """The cabinet's rules after env ``env``'s frame of physics, which scored ``scored``:
     returns the frame's points. The skill shot scores its bonus if its rollover is crossed
     while lit; each touch of the ring by the plumb bob is a warning (forgotten after
-    ``warning_frames`` without another), and one more than ``rules.warnings`` tilts the
+    ``warning_frames`` without another; touches within ``settle_frames`` of a warning are that
+    warning), and one more than ``rules.warnings`` tilts the
     machine. A tilted machine scores nothing; its ball is lost if it waits on the plunger,
     or given up where it lies once it has lain still as long as the ball search waits
     (``tilt``: the machine tilted in this step)."""
@@ -370,6 +372,8 @@ def cabinet_rules(
             skill_left[env] = 0
             skill_shot[env] = True
     touches = 0 if tilted[env] else int(cabinet[env, BOB_TOUCHES])  # a tilted machine is deaf
+    if touches > 0 and warnings[env] > 0 and warning_age[env] < rules.settle_frames:
+        touches = 0  # the bob still swinging from the shove that warned: the same warning
     if touches > 0:
         warnings[env] += touches
         warning_age[env] = 0

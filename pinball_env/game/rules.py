@@ -497,8 +497,8 @@ class Game:
         skill_sensors = np.full(self.n_envs, -1, dtype=np.int64)
         if not self.cabinet:
             return dict(cabinet=False, plunger_x=0.0, plunger_y=0.0, stroke=0.0, pull_step=0.0,
-                        nudge_impulse=0.0, nudge_frames=0, warnings=0,
-                        warning_frames=0, skill_sensors=skill_sensors, skill_bonus=0,
+                        nudge_impulse=0.0, nudge_frames=0, warnings=0, warning_frames=0,
+                        settle_frames=0, skill_sensors=skill_sensors, skill_bonus=0,
                         skill_frames=0)  # fmt: skip
         skill = plunger.skill_shot
         for env in range(self.n_envs):
@@ -515,6 +515,7 @@ class Game:
             nudge_frames=max(1, round(cabinet.nudge_interval * rate)),
             warnings=tilt.warnings,
             warning_frames=max(1, round(tilt.warning_time * rate)),
+            settle_frames=round(tilt.settle_time * rate),
             skill_sensors=skill_sensors,
             skill_bonus=0 if skill is None else skill.bonus,
             skill_frames=0 if skill is None else max(1, round(skill.time * rate)),

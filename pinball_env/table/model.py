@@ -295,6 +295,9 @@ class Tilt:
     ring_restitution: float  # of the bob's bounce off the ring [-]
     warnings: int  # touches of the ring that warn; the next one tilts [-]
     warning_time: float  # a warning is forgotten after this long without another touch [s]
+    # Touches within this long of a warning are that warning (the bob still swinging from the
+    # same shove: a game debounces its tilt switch); 0 counts every touch [s].
+    settle_time: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -437,9 +437,11 @@ def table_to_dict(table: Table) -> dict[str, Any]:
             key: value for key, value in plain(table.plunger).items()
             if _plain(defaults[key]) != value
         }  # fmt: skip
-    for section in ("cabinet", "tilt"):
-        if getattr(table, section) is not None:
-            data[section] = plain(getattr(table, section))
+    if table.cabinet is not None:
+        data["cabinet"] = plain(table.cabinet)
+    if table.tilt is not None:
+        # settle_time only where set: a tilt without one writes as it always did.
+        data["tilt"] = plain(table.tilt, drop=() if table.tilt.settle_time else ("settle_time",))
     data["simulation"] = plain(table.simulation)
     return data
 
@@ -661,8 +663,14 @@ def _tilt(value: object, loc: _Loc, substep: float, gravity: float) -> Tilt:
         "ring_restitution": partial(_number, low=0.0, high=1.0),
         "warnings": partial(_number, low=0, high=10, integer=True),
         "warning_time": partial(_number, low=0.5, high=600.0),  # [s]
+        "settle_time": partial(_number, low=0.0, high=60.0),  # [s]
     }
     tilt = _record(Tilt, value, loc, parsers)
+    if tilt.settle_time >= tilt.warning_time:
+        loc.key("settle_time").fail(
+            f"{tilt.settle_time:g} s is not shorter than warning_time ({tilt.warning_time:g} s): "
+            "a warning would be forgotten while its own swing still counts as it"
+        )
     _check_rates(
         loc, substep, bob_length=math.sqrt(gravity / tilt.bob_length), bob_damping=tilt.bob_damping
     )

@@ -1,13 +1,15 @@
-"""Play ``Pinball-v0`` or ``Pinball-v1`` on the keyboard: ``python -m pinball_env.tools.play``.
+"""Play ``Pinball-v0``, ``-v1`` or ``-v2`` on the keyboard: ``python -m pinball_env.tools.play``.
 
 ``python -m pinball_env.tools.play [--env ID] [--table NAME] [--seed S] [--record FILE]
 [--protocol]`` opens
 a pygame window (the ``render`` extra) and plays at real speed, one env step per frame (the
 table's frame rate, 60 frames per second), with the score and the balls left on the scoreboard.
 ``--env Pinball-v1`` plays the whole cabinet (its table ``classic_v1``): the player's plunger,
-the nudge and the tilt, whose warnings and TILT the scoreboard shows. ``--table`` plays another
+the nudge and the tilt, whose warnings and TILT the scoreboard shows; ``--env Pinball-v2`` the
+same with a tilt that any sustained nudging trips (``classic_v2``). ``--table`` plays another
 table on the env (default: the env's own). ``--protocol`` plays the benchmark protocol's game
-(sticky actions, ``pinball_env.protocol``): a recording of it is a human score that
+(its env, ``Pinball-v2``, unless ``--env`` names another of it; sticky actions,
+``pinball_env.protocol``): a recording of it is a human score that
 ``python -m agents.evaluate --recording FILE`` scores on the protocol. ``--replay FILE
 [--headless]`` plays a recording back and checks that every game scores what was recorded.
 
@@ -35,7 +37,7 @@ closed, and the file is rewritten as each game ends (a game with no step is not 
     {
       "format": "pinball-env-recording",  "version": 1,   // 2 with the cabinet (below)
       "package_version": "0.1.0",          // pinball_env.__version__
-      "env_id": "Pinball-v0",              // or "Pinball-v1"
+      "env_id": "Pinball-v0",              // or "Pinball-v1", "Pinball-v2"
       "options": {"table": "classic"},     // every gym.make option passed
       "max_episode_steps": 7200,           // the TimeLimit of the env played
       "table_sha256": "...",               // the table played (a table file may change)
@@ -73,13 +75,14 @@ import numpy as np
 from pinball_env import __version__  # importing the package registers Pinball-v0
 from pinball_env.env import PinballEnv
 from pinball_env.game import discrete_action
+from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
 from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
 from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Window
 from pinball_env.table import Table, table_to_dict
 from pinball_env.tools.demo import has_display
 
 ENV_ID = "Pinball-v0"  # the env played by default
-ENV_IDS = ("Pinball-v0", "Pinball-v1")  # the envs the tool plays and records
+ENV_IDS = ("Pinball-v0", "Pinball-v1", "Pinball-v2")  # the envs the tool plays and records
 FORMAT = "pinball-env-recording"
 # Format versions, by their actions: 1, digits 0-3 (a table without a cabinet); 2, base-32
 # characters 0-9a-v (the cabinet's 32 actions). A recording is written in the first that holds
@@ -498,8 +501,8 @@ class PlayLoop:
     ``MAX_CABINET_KEYS`` keys with a cabinet key), the first nudge winning as in the map.
     :meth:`close` ends the game in play and writes the recording.
 
-    ``options``: ``gym.make`` options of ``env_id`` (``Pinball-v0`` or ``Pinball-v1``;
-    ``table`` defaults to the env's own, ``"classic"`` or ``"classic_v1"``; not
+    ``options``: ``gym.make`` options of ``env_id`` (one of :data:`ENV_IDS`; ``table``
+    defaults to the env's own, ``"classic"``, ``"classic_v1"`` or ``"classic_v2"``; not
     ``render_mode`` or ``action_type``, which the tool sets); ``seed``: the first game's (None:
     a random one; each restart takes the next); ``record``: the recording's path; ``fps``:
     frames per second, None for real speed, 0 for no waiting (tests).
@@ -638,11 +641,10 @@ def main(argv: list[str] | None = None) -> list[int]:
     parser.add_argument(
         "--env",
         choices=ENV_IDS,
-        help=f"the env to play (default {ENV_ID}; Pinball-v1: the plunger, nudge and tilt)",
+        help=f"the env to play (default {ENV_ID}, or with --protocol {PROTOCOL_ENV_IDS[0]}; "
+        "Pinball-v1 and -v2: the plunger, nudge and tilt)",
     )
-    parser.add_argument(
-        "--table", help="table name or YAML path (default: the env's, classic or classic_v1)"
-    )
+    parser.add_argument("--table", help="table name or YAML path (default: the env's own)")
     parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")
     parser.add_argument(
         "--protocol", action="store_true", help="the benchmark protocol's game (sticky actions)"
@@ -691,7 +693,10 @@ def main(argv: list[str] | None = None) -> list[int]:
     options = {} if args.table is None else {"table": args.table}
     if args.protocol:
         options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
-    loop = PlayLoop(options, args.seed, args.record, env_id=args.env or ENV_ID)
+    env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_ID)
+    if args.protocol and env_id not in PROTOCOL_ENV_IDS:
+        parser.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
+    loop = PlayLoop(options, args.seed, args.record, env_id=env_id)
     print(keys_help(Window.import_pygame(), loop.env.unwrapped.game.cabinet))
     try:
         loop.run()

@@ -8,18 +8,21 @@ Examples::
     python -m pinball_env.tools.plot --gallery --difficulty hard --seeds 0 12 --out gallery.png
     python -m pinball_env.tools.plot classic_v1 --cabinet --out docs/cabinet.png
     python -m pinball_env.tools.plot classic_v1 --rules --out docs/rules.png
+    python -m pinball_env.tools.plot --tilt classic_v1 classic_v2 --out docs/tilt.png
 
 Needs matplotlib (the ``plot`` extra).
 """
 
 import argparse
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from pinball_env.extras import require
 from pinball_env.physics import capsule_face_normal
+from pinball_env.physics.columns import BOB_X, BOB_Y
 from pinball_env.procgen import DIFFICULTIES, generate_table, load_any_table
 from pinball_env.sim.world import World
 from pinball_env.table import Flipper, Table
@@ -268,28 +271,76 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     ax.set_title("one NUDGE_LEFT on a ball in free flight: the table moves left under it, "
                  "and back", fontsize=9)  # fmt: skip
 
+    ax = fig.add_subplot(grid[1, 1])
+    draw_bob(ax, table, bob_trace(table, lambda step: 8 if (step // 15) % 2 == 0 else 16, 150))
+    ax.set_title("nudges left and right every 0.25 s: warnings, then the tilt", fontsize=9)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
+# The nudges of the tilt's patterns by discrete action (see ``game.actions``).
+NUDGE_LEFT, NUDGE_RIGHT = 8, 16
+# The patterns of plot_tilt: the discrete action at each step, over TILT_FRAMES.
+TILT_PATTERNS = {
+    "NUDGE_LEFT every 15 frames (0.25 s)": lambda step: NUDGE_LEFT if step % 15 == 0 else 0,
+    "NUDGE_LEFT and NUDGE_RIGHT in turn every 15 frames": lambda step: (
+        0 if step % 15 else NUDGE_LEFT if step % 30 == 0 else NUDGE_RIGHT
+    ),
+}
+TILT_FRAMES = 240
+
+
+def bob_trace(table: Table, action: Callable[[int], int], frames: int) -> dict[str, np.ndarray]:
+    """The plumb bob's angle from vertical [deg], the warnings standing and the tilt, frame by
+    frame, of a game on ``table`` (one with a cabinet, seed 0) whose step ``k`` takes discrete
+    action ``action(k)``."""
+    from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
+
     env = PinballEnv(table=table)
     env.reset(seed=0)
-    times, angles, warnings, tilts = [], [], [], []
-    for step in range(150):
-        nudge = 8 if (step // 15) % 2 == 0 else 16
-        _, _, _, _, info = env.step(nudge)
+    trace: dict[str, list[float]] = {"time": [], "angle": [], "warnings": [], "tilted": []}
+    for step in range(frames):
+        _, _, _, _, info = env.step(action(step))
         bob = env.game.world.state.cabinet[0]
-        times.append(step / rate)
-        angles.append(math.degrees(math.hypot(bob[6], bob[7])))
-        warnings.append(info["tilt_warnings"])
-        tilts.append(info["tilted"])
-    ax = fig.add_subplot(grid[1, 1])
-    ax.plot(times, angles, color="#1d3557", label="plumb bob's angle [deg]")
+        trace["time"].append(step / table.simulation.frame_rate)
+        trace["angle"].append(math.degrees(math.hypot(bob[BOB_X], bob[BOB_Y])))
+        trace["warnings"].append(info["tilt_warnings"])
+        trace["tilted"].append(info["tilted"])
+    return {key: np.array(values) for key, values in trace.items()}
+
+
+def draw_bob(ax, table: Table, trace: dict[str, np.ndarray]) -> None:
+    """Draw a :func:`bob_trace` on ``ax``: the bob's angle, its ring, the warnings, the tilts."""
+    times, tilts = trace["time"], trace["tilted"]
+    ax.plot(times, trace["angle"], color="#1d3557", label="plumb bob's angle [deg]")
     ax.axhline(table.tilt.ring_angle, color="#e63946", ls="--", lw=0.8, label="the ring")
-    ax.step(times, warnings, color="#f4a261", where="post", label="warnings")
+    ax.step(times, trace["warnings"], color="#f4a261", where="post", label="warnings")
     for t, tilted, before in zip(times, tilts, [False, *tilts], strict=False):
         if tilted and not before:  # a tilt: the ball lost, the next one served
             ax.axvline(t, color="#e63946", lw=2, alpha=0.5)
             ax.text(t, table.tilt.ring_angle * 1.05, " TILT", color="#e63946", fontsize=8)
     ax.set_xlabel("time [s]")
     ax.legend(fontsize=7, loc="upper left")
-    ax.set_title("nudges left and right every 0.25 s: warnings, then the tilt", fontsize=9)
+
+
+def plot_tilt(tables: list[Table], out: Path) -> Path:
+    """Write a PNG of the plumb bob of each of ``tables`` (with a cabinet; a row each) under
+    :data:`TILT_PATTERNS` (a column each), from a ball waiting on the plunger: its angle, its
+    ring, the warnings and the tilt."""
+    for table in tables:
+        if not table.has_cabinet:
+            raise ValueError(f"table {table.name!r} has no cabinet")
+    plt = _pyplot()
+    fig, axes = plt.subplots(
+        len(tables), len(TILT_PATTERNS), figsize=(11, 3.2 * len(tables)), squeeze=False
+    )
+    for row, table in zip(axes, tables, strict=True):
+        for ax, (name, action) in zip(row, TILT_PATTERNS.items(), strict=True):
+            draw_bob(ax, table, bob_trace(table, action, TILT_FRAMES))
+            ax.set_title(f"{table.name}: {name}", fontsize=9)
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=90, bbox_inches="tight")
@@ -314,6 +365,10 @@ def main(argv: list[str] | None = None) -> Path:
         "--cabinet", action="store_true", help="the plunger, a nudge and the tilt at work"
     )
     parser.add_argument(
+        "--tilt", nargs="+", metavar="TABLE",
+        help="the plumb bob of these tables (with a cabinet) under one-way and alternating nudges",
+    )  # fmt: skip
+    parser.add_argument(
         "--rules", action="store_true", help="a heuristic game: the rules' lights and score"
     )
     parser.add_argument(
@@ -334,6 +389,10 @@ def main(argv: list[str] | None = None) -> Path:
         return out
     if args.rules:
         out = plot_rules(load_any_table(args.table), args.out)
+        print(f"wrote {out}")
+        return out
+    if args.tilt:
+        out = plot_tilt([load_any_table(name) for name in args.tilt], args.out)
         print(f"wrote {out}")
         return out
     if args.cabinet:
