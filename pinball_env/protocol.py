@@ -3,10 +3,12 @@
 As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggregate metrics
 (Agarwal et al. 2021):
 
-- **Envs**: ``Pinball-v1`` (the whole cabinet, its full action set of 32 actions) and
-  ``Pinball-v0`` (for continuity), each on its own table, 3 balls, a game of two minutes
-  (:data:`GAME_OPTIONS`). An agent may choose how it sees and acts (``obs_type``,
-  ``frame_skip``, ``skip_above``, ``rays``, its reward shaping), not the game.
+- **Envs**: ``Pinball-v2`` (the whole cabinet, its full action set of 32 actions, a tilt that
+  any sustained nudging trips); ``Pinball-v1`` (the same game with v1's tilt, which ignores
+  one-way nudging) and ``Pinball-v0`` (flippers only), each a track of its own: each on its own
+  table, 3 balls, a game of two minutes (:data:`GAME_OPTIONS`). An agent may choose how it sees
+  and acts (``obs_type``, ``frame_skip``, ``skip_above``, ``rays``, its reward shaping), not the
+  game.
 - **Sticky actions** in evaluation: ``repeat_action_probability`` 0.25, as ALE v5, drawn frame by
   frame from each game's own random stream, so that no evaluation is a sequence an agent could
   learn by heart.
@@ -33,7 +35,8 @@ from typing import Any
 
 import numpy as np
 
-# The envs of the protocol: the whole cabinet first, the flippers-only game for continuity.
+# The envs of the protocol: the whole cabinet with the tilt any sustained nudging trips first,
+# then v1's cabinet (whose tilt ignores one-way nudging) and the flippers-only game, as tracks.
 ENV_IDS = ("Pinball-v2", "Pinball-v1", "Pinball-v0")
 # ALE v5's sticky actions: each frame repeats the last one's buttons with this probability.
 REPEAT_ACTION_PROBABILITY = 0.25
@@ -63,9 +66,10 @@ PROFILE_TAUS = np.linspace(-0.5, 2.5, 121)
 
 # Mean scores of random play (uniform actions) and of the heuristic
 # (pinball_env.heuristic.HeuristicPolicy) over EVAL_SEEDS under the protocol: the 0 and the 1 of
-# normalised scores. Measured by ``python -m agents.benchmark --methods random-v1 heuristic-v1
-# random-v0 heuristic-v0`` (benchmark.json, "reference_measured"); fixed here so that every
-# paper normalises alike.
+# normalised scores. Measured by ``python -m agents.benchmark --methods random-v2 heuristic-v2
+# random-v1 heuristic-v1 random-v0 heuristic-v0`` (benchmark.json, "reference_measured"); fixed
+# here so that every paper normalises alike. (Random play tilts Pinball-v2 in each ball's first
+# seconds: 3 of its 4 actions nudge.)
 REFERENCE_SCORES: dict[str, dict[str, float]] = {
     "Pinball-v2": {"random": 3.8, "heuristic": 49423.4},
     "Pinball-v1": {"random": 6402.7, "heuristic": 53590.7},

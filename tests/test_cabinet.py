@@ -1,4 +1,5 @@
-"""The whole cabinet (Pinball-v1): the player's plunger, the nudge and the tilt.
+"""The whole cabinet (Pinball-v1, and Pinball-v2 where it differs): the player's plunger, the
+nudge and the tilt.
 
 Analytic answers (a nudge's velocity change, the plunger's launch speed, the cabinet's and the
 plumb bob's swings against their ODEs), the rules on scripted games, the bad-input errors,
@@ -427,9 +428,10 @@ def rollout(env, seed: int, steps: int, action_seed: int) -> list:
     return out
 
 
-def test_same_seed_same_game():
-    a = rollout(gym.make("Pinball-v1"), 3, 1500, 1)
-    b = rollout(gym.make("Pinball-v1"), 3, 1500, 1)
+@pytest.mark.parametrize("env_id", ["Pinball-v1", "Pinball-v2"])
+def test_same_seed_same_game(env_id):
+    a = rollout(gym.make(env_id), 3, 1500, 1)
+    b = rollout(gym.make(env_id), 3, 1500, 1)
     assert a == b
 
 
@@ -437,12 +439,15 @@ V1_INFO_KEYS = ("score", "balls_left", "points", "drained", "frames", "tilt_warn
                 "ball_on_plunger", "plunger_pull", "cabinet_offset", "skill_shot")  # fmt: skip
 
 
-@pytest.mark.parametrize("action_type", ["discrete", "multibinary"])
-def test_the_vector_env_is_bitwise_n_single_envs(action_type):
+@pytest.mark.parametrize(
+    ("env_id", "action_type"),
+    [("Pinball-v1", "discrete"), ("Pinball-v1", "multibinary"), ("Pinball-v2", "discrete")],
+)
+def test_the_vector_env_is_bitwise_n_single_envs(env_id, action_type):
     n, seed = 3, 7
     kwargs = {"action_type": action_type, "balls": 1, "max_episode_steps": 500}
-    vector = gym.make_vec("Pinball-v1", num_envs=n, **kwargs)
-    singles = [gym.make("Pinball-v1", **kwargs) for _ in range(n)]
+    vector = gym.make_vec(env_id, num_envs=n, **kwargs)
+    singles = [gym.make(env_id, **kwargs) for _ in range(n)]
     obs, _ = vector.reset(seed=seed)
     for env, single in enumerate(singles):
         assert obs[env].tobytes() == single.reset(seed=seed + env)[0].tobytes()

@@ -301,7 +301,7 @@ def _delete(key: str) -> Callable[[dict[str, Any]], None]:
         (_set("games", 0, "frames", -1), r"games\[0\]\.frames must be >= 0"),
         (_set("games", []), r"holds no game"),
         (_set("options", "render_mode", "human"), r"options\.render_mode is set by the play"),
-        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0' or 'Pinball-v1' games"),
+        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0', 'Pinball-v1' or 'Pinball-v2' games"),
         (_set("table_sha256", "abc"), r"table_sha256 must be 64"),
     ],
 )
@@ -512,7 +512,9 @@ def test_the_play_loop_acts_as_the_key_map_and_on_any_number_of_keys(env_id):
 
 
 def test_the_play_tool_plays_only_pinball_envs():
-    with pytest.raises(ValueError, match="plays Pinball-v0 or Pinball-v1, not 'CartPole-v1'"):
+    with pytest.raises(
+        ValueError, match="plays Pinball-v0, Pinball-v1 or Pinball-v2, not 'CartPole-v1'"
+    ):
         play.PlayLoop(env_id="CartPole-v1")
 
 

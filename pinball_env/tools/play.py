@@ -235,7 +235,7 @@ def parse_recording(data: Any, source: str = "recording") -> Recording:
             "can differ between versions, so it is not replayed"
         )
     if top["env_id"] not in ENV_IDS:
-        known = " or ".join(map(repr, ENV_IDS))
+        known = ", ".join(map(repr, ENV_IDS[:-1])) + f" or {ENV_IDS[-1]!r}"
         raise fail(f"env_id {top['env_id']!r}: only {known} games are recorded")
     options = top["options"]
     for key in FIXED_OPTIONS:
@@ -517,7 +517,8 @@ class PlayLoop:
         env_id: str = ENV_ID,
     ) -> None:
         if env_id not in ENV_IDS:
-            raise ValueError(f"the play tool plays {' or '.join(ENV_IDS)}, not {env_id!r}")
+            known = ", ".join(ENV_IDS[:-1]) + f" or {ENV_IDS[-1]}"
+            raise ValueError(f"the play tool plays {known}, not {env_id!r}")
         self.options = {"table": default_table(env_id), **(options or {})}
         self.env = make_env(self.options, env_id=env_id)
         self.screen = _Screen(self.env, fps, "Pinball")
