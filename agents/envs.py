@@ -21,13 +21,16 @@ def make_env(
     stats: Path | None = None,
     render: bool = False,
     frozen: Callable[[np.ndarray], np.ndarray] | None = None,
+    step_infos: bool = True,
 ) -> Any:
     """The stable-baselines3 VecEnv a config trains on: the native vector env (``num_envs``
     games, env i first reset with ``seed + i``), frame stacking, and ``VecNormalize``.
 
     With ``stats`` (a saved ``VecNormalize``), its statistics are loaded and frozen, and rewards
     are left raw; with ``frozen`` (a policy's ``ObsNormalization``), observations are
-    normalised by it instead: either is the evaluation's view of the same env.
+    normalised by it instead: either is the evaluation's view of the same env. Without
+    ``step_infos`` (training's chain), a step's infos are filled only for the envs whose game
+    ended (``SB3VecEnv``): a scripted player, which reads every env's info, needs them.
     """
     from stable_baselines3.common.vec_env import VecFrameStack, VecNormalize, VecTransposeImage
 
@@ -37,7 +40,8 @@ def make_env(
             config.env.id, num_envs=num_envs or config.env.num_envs,
             vectorization_mode="vector_entry_point", num_threads=config.env_threads,
             render_mode="rgb_array" if render else None, **kwargs,
-        )
+        ),
+        step_infos=step_infos,
     )  # fmt: skip
     venv.seed(config.seed if seed is None else seed)
     image = kwargs.get("obs_type", "state") != "state"
@@ -79,14 +83,14 @@ def frozen_observations(venv: Any, normalise: Callable[[np.ndarray], np.ndarray]
 
 
 class FrameCounter:
-    """The frames played by all envs of a VecEnv, counted from each step's infos (a step's
-    frames vary with the frame skip, ``skip_above`` and the end of a game)."""
+    """The frames played by all envs of a VecEnv chain over ``SB3VecEnv`` (its ``frames``,
+    counted from the vector env's arrays: a step's frames vary with the frame skip,
+    ``skip_above`` and the end of a game), ``frames`` before it was made included."""
 
-    def __init__(self, num_envs: int, frames: int = 0) -> None:
-        self.frames = frames
-        self.game_frames = np.zeros(num_envs, dtype=np.int64)  # of each env's game, last step
+    def __init__(self, venv: Any, frames: int = 0) -> None:
+        self.venv = venv.unwrapped
+        self.offset = frames - self.venv.frames
 
-    def update(self, dones: np.ndarray, infos: list[dict[str, Any]]) -> None:
-        for env, (done, info) in enumerate(zip(dones, infos, strict=True)):
-            self.frames += int(info["frames"] - self.game_frames[env])
-            self.game_frames[env] = 0 if done else info["frames"]
+    @property
+    def frames(self) -> int:
+        return self.offset + self.venv.frames

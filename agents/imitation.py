@@ -44,7 +44,7 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
     raw = getattr(venv, "get_original_obs", None)
     obs = venv.reset()
     observations, actions, rewards, dones = [], [], [], []
-    frames = FrameCounter(n)
+    frames = FrameCounter(venv)
     for step in range(steps):
         if step and stop:
             break
@@ -54,11 +54,10 @@ def teacher_games(venv: Any, steps: int, stop: Any = False) -> dict[str, Any]:
             players(env, {key: values[env] for key, values in infos.items()})
             for env in range(n)
         ])  # fmt: skip
-        obs, reward, done, infos = venv.step(action)
+        obs, reward, done, _ = venv.step(action)
         actions.append(action)
         rewards.append(venv.get_original_reward() if raw else reward)
         dones.append(done)
-        frames.update(done, infos)
         for env in np.flatnonzero(done):  # a new game (maybe on a new table): a new player
             players.new_game(env)
     return {

@@ -156,9 +156,9 @@ def make_callback(
             super().__init__()
             self.scores: collections.deque = collections.deque(maxlen=100)
             self.truncated: collections.deque = collections.deque(maxlen=100)
-            self.counter = FrameCounter(config.env.num_envs, frames)
 
         def _on_training_start(self) -> None:  # the next checkpoint and validation (0: none)
+            self.counter = FrameCounter(self.training_env, frames)
             self.next_checkpoint = next_multiple(self.num_timesteps, config.checkpoint_every)
             self.next_validation = next_multiple(self.num_timesteps, validate_every)
             self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
@@ -174,7 +174,6 @@ def make_callback(
 
         def _on_step(self) -> bool:
             dones, infos = self.locals["dones"], self.locals["infos"]
-            self.counter.update(dones, infos)
             for env in np.flatnonzero(dones):
                 self.scores.append(infos[env]["score"])
                 self.truncated.append(infos[env].get("TimeLimit.truncated", False))
@@ -284,7 +283,7 @@ def _model(
     stats = stats_for(checkpoint[1]) if checkpoint else None
     if checkpoint and config.env.normalize and stats is None:
         raise ConfigError(f"{checkpoint[1]}: its VecNormalize statistics are missing")
-    venv = make_env(config, stats=stats)
+    venv = make_env(config, stats=stats, step_infos=False)
     if checkpoint is None:
         try:
             model = algorithm(

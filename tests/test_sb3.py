@@ -28,6 +28,40 @@ def test_steps_report_terminal_observations_and_time_limits():
     assert (obs[:, 9] == 3).all()
 
 
+@pytest.mark.parametrize("step_infos", [False, True])
+def test_infos_only_where_a_game_ended_unless_asked_and_frames_counted(step_infos):
+    """Without ``step_infos`` an env's info dict is empty but in the step its game ends (then
+    it is what SB3 reads: the last step's keys, ``terminal_observation``,
+    ``TimeLimit.truncated``, ``episode``); with it, every env's keys every step. Either way
+    ``frames`` is the sum of every game's frames, as the per-env infos count them."""
+    venv = gym.make_vec("Pinball-v1", num_envs=6, frame_skip=3, max_episode_steps=70)
+    env = SB3VecEnv(venv, step_infos=step_infos)
+    env.seed(5)
+    env.reset()
+    rng = np.random.default_rng(0)
+    reference = SB3VecEnv(gym.make_vec("Pinball-v1", num_envs=6, frame_skip=3,
+                                       max_episode_steps=70), step_infos=True)  # fmt: skip
+    reference.seed(5)
+    reference.reset()
+    counted, last, ended = 0, np.zeros(6, dtype=np.int64), 0
+    for _ in range(150):
+        actions = rng.integers(0, 32, size=6)
+        obs, rewards, dones, infos = env.step(actions)
+        obs1, rewards1, dones1, infos1 = reference.step(actions)
+        assert obs.tobytes() == obs1.tobytes() and rewards.tobytes() == rewards1.tobytes()
+        assert (dones == dones1).all()
+        for done, info, info1 in zip(dones, infos, infos1, strict=True):
+            assert info.keys() == info1.keys() if (done or step_infos) else info == {}
+            if done:
+                assert info["score"] == info1["score"] and "terminal_observation" in info
+                assert set(info["episode"]) == {"r", "l", "t"}
+        for e, info in enumerate(infos1):
+            counted += int(info["frames"]) - last[e]
+            last[e] = 0 if dones1[e] else info["frames"]
+        ended += int(dones.sum())
+    assert ended > 6 and env.frames == reference.frames == counted > 0
+
+
 def test_seeding_attributes_and_images():
     env = SB3VecEnv(gym.make_vec("Pinball-v0", num_envs=2, render_mode="rgb_array"))
     env.seed(3)

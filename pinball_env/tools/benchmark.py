@@ -12,7 +12,9 @@ Measures, with uniformly random actions on the classic table (state observations
 - the native vector env as agents train on it (``TRAINING_KWARGS``: frame skip 2, the step
   running on while the ball is high, shaping) at N = 32 and 128, 1 thread: each step is about
   15 frames of every env;
-- ``Pinball-v1``'s (the whole cabinet) native vector env at N = 1024 with 1 and 2 threads;
+- ``Pinball-v1``'s (the whole cabinet) native vector env at N = 1024 with 1 and 2 threads, and
+  with 2 threads the chain stable-baselines3 steps over it (``SB3VecEnv`` under
+  ``VecNormalize``: ``v1_sb3chain1024_2thread``);
 - ``PinballProcgen-v0``'s native vector env at N = 1024 with 2 threads, each env on its own
   generated table (16 layouts, generated before the timing), with 16 rays in the observation;
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
@@ -94,6 +96,7 @@ RATIOS = (
     ("native1024_2thread", "cartpole_vec1024"),
     ("procgen1024_16layouts_2thread", "native1024_2thread"),
     ("v1_native1024_2thread", "native1024_2thread"),
+    ("v1_sb3chain1024_2thread", "v1_native1024_2thread"),
     ("single_swept", "cartpole_single"),
     ("single_swept", "single_swept_unwrapped"),
     ("single_swept", "single_pymunk"),
@@ -258,6 +261,33 @@ def steps_per_second(env: gym.Env | gym.vector.VectorEnv, steps: int, seed: int)
     return steps * (env.num_envs if vector else 1) / seconds
 
 
+def sb3_chain_steps_per_second(
+    n: int, threads: int, env_id: str, steps: int, seed: int
+) -> float | None:
+    """Env-steps per second of the chain stable-baselines3 trains on: ``SB3VecEnv`` (infos
+    only where a game ended, as in training) under ``VecNormalize``, over ``env_id``'s native
+    vector env of ``n`` envs on ``threads`` threads, under uniformly random actions; None
+    without stable-baselines3."""
+    try:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        from pinball_env.wrappers import SB3VecEnv
+    except ImportError:
+        return None
+    venv = VecNormalize(SB3VecEnv(gym.make_vec(env_id, num_envs=n, num_threads=threads)))
+    rng = np.random.default_rng(seed)
+    actions = [rng.integers(venv.action_space.n, size=n) for _ in range(min(steps, 100))]
+    venv.seed(seed)
+    venv.reset()
+    venv.step(actions[0])  # compile (or load the cached kernels) outside the timing
+    start = time.perf_counter()
+    for i in range(steps):
+        venv.step(actions[i % len(actions)])
+    seconds = time.perf_counter() - start
+    venv.close()
+    return steps * n / seconds
+
+
 def startup_seconds(cold: bool) -> float:
     """Import + make + first step in a fresh process, with a warm numba cache (this run's) or
     a cold one (an empty cache folder: every kernel compiles)."""
@@ -275,7 +305,7 @@ def startup_seconds(cold: bool) -> float:
     return float(result.stdout.strip().splitlines()[-1])
 
 
-def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]]:
+def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float | None]]]:
     """Every steps-per-second figure's name and the call that measures it."""
     scale = 20 if quick else 1
 
@@ -300,7 +330,7 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
                            **kwargs)  # fmt: skip
         return steps_per_second(env, steps(max(300, 300_000 // max(n, 100))), seed)
 
-    figures: list[tuple[str, Callable[[], float]]] = [
+    figures: list[tuple[str, Callable[[], float | None]]] = [
         ("single_swept", lambda: single("swept")),
         ("single_swept_unwrapped", lambda: single("swept", unwrapped=True)),
         ("single_pymunk", lambda: single("pymunk")),
@@ -315,6 +345,9 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float]]
     for threads in (1, 2):  # the whole cabinet: plunger, nudges (random ones tilt), the bob
         figures.append((f"v1_native1024_{threads}thread",
                         lambda t=threads: native(1024, t, env_id="Pinball-v1")))  # fmt: skip
+    # The same as stable-baselines3 steps it: SB3VecEnv and VecNormalize over it.
+    figures.append(("v1_sb3chain1024_2thread", lambda: sb3_chain_steps_per_second(
+        1024, 2, "Pinball-v1", steps(300), seed)))  # fmt: skip
 
     def procgen(n: int, threads: int) -> float:
         env = gym.make_vec("PinballProcgen-v0", num_envs=n, num_threads=threads, num_layouts=16,
@@ -338,7 +371,7 @@ def groups(quick: bool, seed: int) -> list[tuple[str, Callable[[], Figures]]]:
     """Every measurement's name and the call that makes it, giving one figure or more: the
     units that ``run`` goes through and ``--compare`` alternates (``--worker NAME`` runs one)."""
 
-    def rate(name: str, measure: Callable[[], float]) -> Callable[[], Figures]:
+    def rate(name: str, measure: Callable[[], float | None]) -> Callable[[], Figures]:
         return lambda: {f"{name}_steps_per_second": measure()}
 
     n_envs, frames = (256, 20) if quick else (1024, 300)

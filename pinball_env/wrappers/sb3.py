@@ -28,18 +28,23 @@ class SB3VecEnv(VecEnv):
 
     The vector env is switched to ``SAME_STEP`` autoreset (before its first step). Give it the
     bare vector env: Gymnasium vector wrappers would be bypassed (use SB3's ``VecEnv`` wrappers,
-    such as ``VecNormalize``, around this one). Infos are a dict per env: the vector env's info
-    keys, ``TimeLimit.truncated`` every step, and ``terminal_observation`` and ``episode``
-    (``r``, ``l``, ``t``, as SB3's ``Monitor`` writes them) when its episode ends. ``seed(s)``
-    seeds env i with ``s + i`` at the next reset. ``get_attr``, ``set_attr`` and
-    ``env_method`` act on each env of ``indices`` (default: all) as the vector env's
-    ``env_attr``, ``set_env_attr`` and ``call_env`` do (see ``PinballVectorEnv``): per-env
-    attributes such as ``table``, ``layout`` (procgen) or ``np_random`` are each env's own,
-    the vector env's attributes are shared (``set_attr`` of one of them needs every env), and
-    other names are the user's, per env.
+    such as ``VecNormalize``, around this one). Infos are a dict per env, as SB3 wants them,
+    filled only where SB3 reads them: an env whose episode ended in the step has the vector
+    env's info keys of its last step, ``terminal_observation``, ``TimeLimit.truncated`` and
+    ``episode`` (``r``, ``l``, ``t``, as SB3's ``Monitor`` writes them); the others' dicts are
+    empty, so that a step does no per-env Python work for them. With ``step_infos`` every env's
+    dict has its info keys and ``TimeLimit.truncated`` every step (a scripted player reads
+    them; a callback can switch it at any time). ``frames`` counts the frames every env has
+    played since the adapter was made, from the vector env's arrays. ``seed(s)`` seeds env i
+    with ``s + i`` at the next reset. ``get_attr``, ``set_attr`` and ``env_method`` act on each
+    env of ``indices`` (default: all) as the vector env's ``env_attr``, ``set_env_attr`` and
+    ``call_env`` do (see ``PinballVectorEnv``): per-env attributes such as ``table``,
+    ``layout`` (procgen) or ``np_random`` are each env's own, the vector env's attributes are
+    shared (``set_attr`` of one of them needs every env), and other names are the user's, per
+    env.
     """
 
-    def __init__(self, venv: PinballVectorEnv) -> None:
+    def __init__(self, venv: PinballVectorEnv, step_infos: bool = False) -> None:
         if not isinstance(venv, PinballVectorEnv):
             raise TypeError(
                 f"SB3VecEnv wraps a bare PinballVectorEnv (gym.make_vec('Pinball-v0', ...)), got "
@@ -48,6 +53,9 @@ class SB3VecEnv(VecEnv):
         venv.autoreset_mode = AutoresetMode.SAME_STEP
         venv.metadata = {**venv.metadata, "autoreset_mode": AutoresetMode.SAME_STEP}
         self.venv = venv
+        self.step_infos = step_infos
+        self.frames = 0  # frames played by all envs since the adapter was made
+        self._game_frames = np.zeros(venv.num_envs, dtype=np.int64)  # each game's, last step
         self._actions: np.ndarray | None = None
         self._start = time.perf_counter()
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
@@ -59,6 +67,7 @@ class SB3VecEnv(VecEnv):
         self._reset_seeds()
         self._reset_options()
         self.reset_infos = _per_env(infos, self.num_envs)
+        self._game_frames[:] = infos["frames"]
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:
@@ -67,10 +76,21 @@ class SB3VecEnv(VecEnv):
     def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
         obs, rewards, terminated, truncated, infos = self.venv.step(self._actions)
         dones = terminated | truncated
-        per_env = _per_env(infos, self.num_envs)
-        for env in range(self.num_envs):
-            per_env[env]["TimeLimit.truncated"] = bool(truncated[env] and not terminated[env])
-        for env in np.flatnonzero(dones):
+        ended = np.flatnonzero(dones)
+        frames = infos["frames"]
+        if ended.size:
+            frames = frames.copy()
+            frames[ended] = infos["final_info"]["frames"][ended]  # the games that ended
+        self.frames += int((frames - self._game_frames).sum())
+        self._game_frames[:] = frames
+        self._game_frames[ended] = 0
+        if self.step_infos:
+            per_env = _per_env(infos, self.num_envs)
+            for info, cut in zip(per_env, (truncated & ~terminated).tolist(), strict=True):
+                info["TimeLimit.truncated"] = cut
+        else:
+            per_env = [{} for _ in range(self.num_envs)]
+        for env in ended:
             # The last step of the episode (the env has been reset since).
             final = infos["final_info"]
             info = per_env[env] = {
