@@ -112,6 +112,7 @@ _TINY_PPO = (*_TINY, "hyperparams.n_steps=64", "hyperparams.batch_size=64",
 METHODS: dict[str, Method] = {
     "random-v2": Method("Pinball-v2", baseline="random"),
     "heuristic-v2": Method("Pinball-v2", baseline="heuristic"),
+    "ppo-scale-v2": Method("Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO),
     "random-v1": Method("Pinball-v1", baseline="random"),
     "heuristic-v1": Method("Pinball-v1", baseline="heuristic"),
     "ppo-v1": Method("Pinball-v1", "ppo_v1.yaml", tiny=_TINY_PPO),

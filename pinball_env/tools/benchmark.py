@@ -1,6 +1,7 @@
 """Speed of the envs, the kernel, and references of this machine, in one run:
 ``python -m pinball_env.tools.benchmark`` (``--quick`` for a short run, ``--json PATH``,
-``--compare REV`` for the same figures of a git revision, measured alternately in the same run).
+``--compare REV`` for the same figures of a git revision, measured alternately in the same run,
+``--only NAME ...`` for some of the measurements).
 
 Measures, with uniformly random actions on the classic table (state observations unless said):
 
@@ -25,13 +26,15 @@ Measures, with uniformly random actions on the classic table (state observations
 - table generation (``tablegen_ms_per_table``, ``tablegen_targets_ms_per_table``): milliseconds
   per generated table, drawn, validated and checked for playability (``generate_table`` called
   directly, no cache), the mean over 8 (``--quick``) or 32 seeds, without and with targets;
-- stable-baselines3 PPO training with the shipped ``configs/agents/ppo.yaml`` (its env, its
-  hyperparameters, its torch threads; no warm start, validation or checkpoints), 2 (``--quick``)
-  or 8 rollouts and updates timed after an untimed one: ``sb3_ppo_env_steps_per_second``, and
-  the shares of that wall time ``sb3_ppo_env_share`` (inside the VecEnv's ``step_async``,
-  ``step_wait`` and ``reset``, ``VecNormalize`` included: the env as SB3 sees it) and
-  ``sb3_ppo_learner_share`` (the rest: the policy's forward passes in the rollouts, the buffer
-  and its advantages, ``train()``'s epochs, SB3's bookkeeping);
+- stable-baselines3 PPO training with the shipped ``configs/agents/ppo.yaml`` (``sb3_ppo``)
+  and with the recipe at the env's speed, ``configs/agents/ppo_scale_v2.yaml``
+  (``sb3_ppo_scale_v2``: 1024 envs of Pinball-v2), each with its env, its hyperparameters and
+  its threads (no warm start, validation or checkpoints), 2 (``--quick``) or 8 rollouts and
+  updates timed after an untimed one: ``PREFIX_env_steps_per_second``, and the shares of that
+  wall time ``PREFIX_env_share`` (inside the VecEnv's ``step_async``, ``step_wait`` and
+  ``reset``, ``VecNormalize`` included: the env as SB3 sees it) and ``PREFIX_learner_share``
+  (the rest: the policy's forward passes in the rollouts, the buffer and its advantages,
+  ``train()``'s epochs, SB3's bookkeeping);
 - start-up: import + make + first step with a warm numba cache, and with a cold one (compiling
   every kernel; skipped with ``--quick``), each in a fresh process;
 
@@ -102,9 +105,13 @@ RATIOS = (
     ("single_swept", "single_pymunk"),
 )
 
-# The config whose training rate is measured, relative to the tree that holds the package.
-PPO_CONFIG = Path("configs/agents/ppo.yaml")
-SB3_FIGURES = ("sb3_ppo_env_steps_per_second", "sb3_ppo_env_share", "sb3_ppo_learner_share")
+# The configs whose training rate is measured, relative to the tree that holds the package, by
+# the prefix of their figures: the shipped default, and the recipe at the env's speed.
+SB3_CONFIGS = {
+    "sb3_ppo": Path("configs/agents/ppo.yaml"),
+    "sb3_ppo_scale_v2": Path("configs/agents/ppo_scale_v2.yaml"),
+}
+SB3_FIGURES = ("env_steps_per_second", "env_share", "learner_share")
 TABLEGEN_FIGURES = ("tablegen_ms_per_table", "tablegen_targets_ms_per_table")
 # Generated tables' seeds start here (plus 1000 per --seed): seeds no test or config uses.
 TABLEGEN_SEED = 7_000_000
@@ -182,22 +189,25 @@ def measure_tablegen(count: int, seed: int) -> Figures:
     return result
 
 
-def measure_sb3_ppo(iterations: int) -> Figures:
-    """stable-baselines3 PPO training with the shipped config (``PPO_CONFIG`` beside this
+def measure_sb3(prefix: str, iterations: int) -> Figures:
+    """stable-baselines3 training with the config ``SB3_CONFIGS[prefix]`` (beside this
     package), set up as ``agents.train`` does it (``load_config``, ``set_threads``: torch's
-    threads are the config's; ``make_env``; the algorithm with ``sb3_hyperparams``); one rollout
-    and update untimed, then ``iterations`` timed. Returns the env steps per second of the timed
-    ``learn`` call (wall time), the share of it inside the VecEnv's ``step_async``,
+    threads are the config's; ``make_env`` as training's chain; the algorithm with
+    ``sb3_hyperparams``; no warm start, validation or checkpoints); one rollout and update
+    untimed, then ``iterations`` timed. Returns ``PREFIX_env_steps_per_second`` of the timed
+    ``learn`` call (wall time), ``PREFIX_env_share`` of it inside the VecEnv's ``step_async``,
     ``step_wait`` and ``reset`` (the whole chain SB3 steps, ``VecNormalize`` included), and the
-    rest, the learner's share. Null without torch and stable-baselines3, or without the config."""
+    rest, ``PREFIX_learner_share``. Null without torch and stable-baselines3, or without the
+    config (an older revision)."""
+    names = [f"{prefix}_{figure}" for figure in SB3_FIGURES]
     root = Path(pinball_env.__file__).resolve().parent.parent
-    if not (root / PPO_CONFIG).is_file():
-        return dict.fromkeys(SB3_FIGURES)
+    if not (root / SB3_CONFIGS[prefix]).is_file():
+        return dict.fromkeys(names)
     try:
         import stable_baselines3  # noqa: F401
         import torch  # noqa: F401
     except ImportError:
-        return dict.fromkeys(SB3_FIGURES)
+        return dict.fromkeys(names)
     if str(root) not in sys.path:  # the agents package beside pinball_env
         sys.path.insert(0, str(root))
     from agents.config import algorithm_class, load_config, sb3_hyperparams
@@ -208,9 +218,11 @@ def measure_sb3_ppo(iterations: int) -> Figures:
     except ImportError:  # an older revision (--compare): make_env was in agents.common
         from agents.common import make_env
 
-    config = load_config(root / PPO_CONFIG)
+    config = load_config(root / SB3_CONFIGS[prefix])
     set_threads(config)
-    venv = make_env(config)
+    # Training's chain: infos only where a game ended (older revisions filled every env's).
+    quiet = {"step_infos": False} if "step_infos" in inspect.signature(make_env).parameters else {}
+    venv = make_env(config, **quiet)
     model = algorithm_class(config.algo)(
         config.policy, venv, seed=config.seed, device=config.device, verbose=0,
         **sb3_hyperparams(config),
@@ -237,11 +249,8 @@ def measure_sb3_ppo(iterations: int) -> Figures:
     model.learn(iterations * rollout, reset_num_timesteps=False)
     seconds = time.perf_counter() - start
     venv.close()
-    return {
-        "sb3_ppo_env_steps_per_second": (model.num_timesteps - before) / seconds,
-        "sb3_ppo_env_share": in_env[0] / seconds,
-        "sb3_ppo_learner_share": 1.0 - in_env[0] / seconds,
-    }
+    rate, share = (model.num_timesteps - before) / seconds, in_env[0] / seconds
+    return dict(zip(names, (rate, share, 1.0 - share), strict=True))
 
 
 def steps_per_second(env: gym.Env | gym.vector.VectorEnv, steps: int, seed: int) -> float:
@@ -379,7 +388,7 @@ def groups(quick: bool, seed: int) -> list[tuple[str, Callable[[], Figures]]]:
     found += [
         ("kernel", lambda: measure_kernel("classic", n_envs, frames, 10.0, seed)),
         ("tablegen", lambda: measure_tablegen(8 if quick else 32, seed)),
-        ("sb3_ppo", lambda: measure_sb3_ppo(2 if quick else 8)),
+        *[(prefix, lambda p=prefix: measure_sb3(p, 2 if quick else 8)) for prefix in SB3_CONFIGS],
         ("startup_warm", lambda: {"startup_warm_seconds": startup_seconds(cold=False)}),
     ]
     if not quick:
@@ -416,10 +425,25 @@ def finish(figures: Figures, quick: bool) -> dict:
     return result
 
 
-def run(quick: bool = False, seed: int = 0) -> dict:
+def selected(
+    quick: bool, seed: int, only: list[str] | None
+) -> list[tuple[str, Callable[[], Figures]]]:
+    """The measurements of :func:`groups` named in ``only`` (all of them without it);
+    ValueError naming the known ones for a name that is not one."""
+    found = groups(quick, seed)
+    if not only:
+        return found
+    names = [name for name, _ in found]
+    unknown = [name for name in only if name not in names]
+    if unknown:
+        raise ValueError(f"no measurement {', '.join(unknown)} (there are: {', '.join(names)})")
+    return [(name, measure) for name, measure in found if name in only]
+
+
+def run(quick: bool = False, seed: int = 0, only: list[str] | None = None) -> dict:
     """All the figures (steps per second, seconds, ratios) as a dict, measured in this
-    process."""
-    todo = groups(quick, seed)
+    process (those of the measurements ``only`` names, with it)."""
+    todo = selected(quick, seed, only)
     figures: Figures = {}
     for done, (name, measure) in enumerate(todo):
         progress(done, len(todo), name)
@@ -531,13 +555,15 @@ def median(values: list[float | None]) -> float | None:
     return statistics.median(measured) if measured else None
 
 
-def compare(rev: str, quick: bool = False, seed: int = 0, repeats: int = 1) -> dict:
+def compare(
+    rev: str, quick: bool = False, seed: int = 0, repeats: int = 1, only: list[str] | None = None
+) -> dict:
     """Every figure for the checkout and for ``rev``, each measurement in a fresh process per
     tree, the two alternating (which goes first alternates too), ``repeats`` times each, the
     median kept: :func:`finish`'s dict of the checkout with ``"compare"`` added."""
     checkout = Path(pinball_env.__file__).resolve().parent.parent
     sha, tree = unpack_revision(checkout, rev)
-    names = [name for name, _ in groups(quick, seed)]
+    names = [name for name, _ in selected(quick, seed, only)]
     trees = {"checkout": checkout, "rev": tree}
     values: dict[str, dict[str, list[float | None]]] = {"checkout": {}, "rev": {}}
     keys: dict[str, None] = {}  # the figures in the order measured, either tree's
@@ -623,6 +649,10 @@ def parser() -> argparse.ArgumentParser:
         "--repeats", type=int, default=1,
         help="with --compare: measurements of each figure per tree (the median is kept)",
     )  # fmt: skip
+    parser.add_argument(
+        "--only", nargs="+", metavar="NAME",
+        help="only these measurements (v1_sb3chain1024_2thread, sb3_ppo, kernel, ...)",
+    )  # fmt: skip
     parser.add_argument("--worker", metavar="NAME", help=argparse.SUPPRESS)
     parser.add_argument("--json-out", type=Path, help=argparse.SUPPRESS)
     return parser
@@ -637,13 +667,17 @@ def main(argv: list[str] | None = None) -> dict:
         if args.json_out is None:
             command.error("--worker needs --json-out")
         return worker(args.worker, args.quick, args.seed, args.json_out)
+    try:
+        selected(args.quick, args.seed, args.only)
+    except ValueError as error:
+        command.error(f"--only: {error}")
     if args.compare is not None:
         try:
-            result = compare(args.compare, args.quick, args.seed, args.repeats)
+            result = compare(args.compare, args.quick, args.seed, args.repeats, args.only)
         except RevisionError as error:
             command.error(f"--compare {error}")
     else:
-        result = run(args.quick, args.seed)
+        result = run(args.quick, args.seed, args.only)
     print(table(result))
     print(json.dumps(result))
     if args.json:
