@@ -1,6 +1,7 @@
 """The env chain a config describes, as stable-baselines3 sees it: the native vector env through
-``SB3VecEnv``, frame stacking, channels first for images, and ``VecNormalize`` (or frozen
-statistics for an evaluation); and the frames its games play."""
+``SB3VecEnv``, frame stacking, channels first for images, and ``SB3VecNormalize`` (SB3's
+``VecNormalize`` without its per-env loop; or frozen statistics for an evaluation); and the
+frames its games play."""
 
 from collections.abc import Callable
 from pathlib import Path
@@ -11,7 +12,7 @@ import numpy as np
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
 from agents.config import TrainConfig
-from pinball_env.wrappers import SB3VecEnv
+from pinball_env.wrappers import SB3VecEnv, SB3VecNormalize
 
 
 def make_env(
@@ -57,7 +58,7 @@ def make_env(
             venv.training = False
             venv.norm_reward = False
         else:
-            venv = VecNormalize(
+            venv = SB3VecNormalize(
                 venv, norm_obs=not image, gamma=config.hyperparams.get("gamma", 0.99)
             )
     return venv

@@ -62,6 +62,39 @@ def test_infos_only_where_a_game_ended_unless_asked_and_frames_counted(step_info
     assert ended > 6 and env.frames == reference.frames == counted > 0
 
 
+def test_sb3_vec_normalize_is_vec_normalize_bitwise_and_saves_as_it(tmp_path):
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from pinball_env.wrappers import SB3VecNormalize
+
+    def chain(cls):
+        venv = SB3VecEnv(gym.make_vec("Pinball-v1", num_envs=5, max_episode_steps=40))
+        venv.seed(2)
+        return cls(venv, gamma=0.99)
+
+    ours, theirs = chain(SB3VecNormalize), chain(VecNormalize)
+    assert ours.reset().tobytes() == theirs.reset().tobytes()
+    rng = np.random.default_rng(1)
+    ended = 0
+    for _ in range(90):
+        actions = rng.integers(0, 32, size=5)
+        a, b = ours.step(actions), theirs.step(actions)
+        ended += int(a[2].sum())
+        for x, y in zip(a[:3], b[:3], strict=True):
+            assert x.tobytes() == y.tobytes()
+        for info, other in zip(a[3], b[3], strict=True):
+            if "terminal_observation" in other:
+                assert (
+                    info["terminal_observation"].tobytes()
+                    == other["terminal_observation"].tobytes()
+                )
+    assert ended >= 10  # games ended on the way
+    ours.save(str(tmp_path / "stats.pkl"))
+    loaded = VecNormalize.load(str(tmp_path / "stats.pkl"), chain(VecNormalize).venv)
+    assert isinstance(loaded, SB3VecNormalize)
+    assert loaded.obs_rms.mean.tobytes() == ours.obs_rms.mean.tobytes()
+
+
 def test_seeding_attributes_and_images():
     env = SB3VecEnv(gym.make_vec("Pinball-v0", num_envs=2, render_mode="rgb_array"))
     env.seed(3)

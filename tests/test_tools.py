@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from pinball_env.tools import benchmark, plot
+from pinball_env.tools import benchmark, plot, tilt
 
 
 def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
@@ -29,11 +29,41 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "sb3_ppo_env_steps_per_second",
         "sb3_ppo_env_share",
         "sb3_ppo_learner_share",
+        "sb3_ppo_scale_v2_env_steps_per_second",
+        "v1_sb3chain1024_2thread_steps_per_second",
+        "ratio_v1_sb3chain1024_2thread_to_v1_native1024_2thread",
     ):
         assert saved[key] == result[key] > 0, key
-    assert saved["sb3_ppo_env_share"] + saved["sb3_ppo_learner_share"] == pytest.approx(1.0)
+    for prefix in ("sb3_ppo", "sb3_ppo_scale_v2"):
+        shares = saved[f"{prefix}_env_share"] + saved[f"{prefix}_learner_share"]
+        assert shares == pytest.approx(1.0)
     assert "compare" not in saved
     assert "native4096_1thread_steps_per_second" in capsys.readouterr().out
+
+
+def test_benchmark_measures_only_what_it_is_asked(capsys):
+    result = benchmark.main(["--quick", "--only", "kernel", "v1_sb3chain1024_2thread"])
+    measured = {key for key, value in result.items() if value is not None}
+    assert "kernel_ns_per_ball_element_test" in measured
+    assert "v1_sb3chain1024_2thread_steps_per_second" in measured
+    assert "single_swept_steps_per_second" not in result
+    with pytest.raises(SystemExit):
+        benchmark.main(["--quick", "--only", "no_such_measurement"])
+    assert "no measurement no_such_measurement (there are: " in capsys.readouterr().err
+
+
+def test_the_tilt_tool_and_picture(tmp_path):
+    result = tilt.main(
+        ["--envs", "Pinball-v2", "--seconds", "3", "--json", str(tmp_path / "t.json")]
+    )
+    rows = result["Pinball-v2"]["patterns"]
+    assert len(rows) == len(tilt.PATTERNS) * len(tilt.EVERY)
+    assert all(row["tilt"] is not None and row["tilt"] <= 3.0 for row in rows)
+    assert json.loads((tmp_path / "t.json").read_text()) == result
+    out = plot.main(["--tilt", "classic_v1", "classic_v2", "--out", str(tmp_path / "tilt.png")])
+    assert out.read_bytes()[:4] == b"\x89PNG" and out.stat().st_size > 20_000
+    with pytest.raises(ValueError, match="has no cabinet"):
+        plot.main(["--tilt", "classic", "--out", str(tmp_path / "none.png")])
 
 
 def test_draw_renders_tables_and_traces(tmp_path):
@@ -50,5 +80,5 @@ def test_draw_shows_the_cabinet_at_work(tmp_path):
 
 
 def test_the_tools_run_as_modules_of_pinball_env_tools():
-    for name in ("demo", "plot", "crosscheck", "benchmark"):
+    for name in ("demo", "plot", "crosscheck", "benchmark", "tilt"):
         assert importlib.util.find_spec(f"pinball_env.tools.{name}") is not None, name

@@ -274,16 +274,18 @@ def sb3_chain_steps_per_second(
     n: int, threads: int, env_id: str, steps: int, seed: int
 ) -> float | None:
     """Env-steps per second of the chain stable-baselines3 trains on: ``SB3VecEnv`` (infos
-    only where a game ended, as in training) under ``VecNormalize``, over ``env_id``'s native
+    only where a game ended, as in training) under ``SB3VecNormalize``, over ``env_id``'s native
     vector env of ``n`` envs on ``threads`` threads, under uniformly random actions; None
     without stable-baselines3."""
     try:
         from stable_baselines3.common.vec_env import VecNormalize
 
-        from pinball_env.wrappers import SB3VecEnv
+        from pinball_env.wrappers import sb3
     except ImportError:
         return None
-    venv = VecNormalize(SB3VecEnv(gym.make_vec(env_id, num_envs=n, num_threads=threads)))
+    # The chain agents train on (an older revision's: SB3's own VecNormalize).
+    normalize = getattr(sb3, "SB3VecNormalize", VecNormalize)
+    venv = normalize(sb3.SB3VecEnv(gym.make_vec(env_id, num_envs=n, num_threads=threads)))
     rng = np.random.default_rng(seed)
     actions = [rng.integers(venv.action_space.n, size=n) for _ in range(min(steps, 100))]
     venv.seed(seed)

@@ -1,17 +1,18 @@
 """Wrappers users need around the envs.
 
-- ``SB3VecEnv``: a stable-baselines3 ``VecEnv`` over the native vector env. stable-baselines3 is
-  imported only when it is used (the ``train`` extra).
+- ``SB3VecEnv``: a stable-baselines3 ``VecEnv`` over the native vector env, and
+  ``SB3VecNormalize``, SB3's ``VecNormalize`` without its per-env Python loop. stable-baselines3
+  is imported only when one is used (the ``train`` extra).
 """
 
 from typing import Any
 
-__all__ = ["SB3VecEnv"]
+__all__ = ["SB3VecEnv", "SB3VecNormalize"]
 
 
 def __getattr__(name: str) -> Any:
-    if name == "SB3VecEnv":  # imports stable-baselines3 (and torch) only now
-        from pinball_env.wrappers.sb3 import SB3VecEnv
+    if name in __all__:  # imports stable-baselines3 (and torch) only now
+        from pinball_env.wrappers import sb3
 
-        return SB3VecEnv
+        return getattr(sb3, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

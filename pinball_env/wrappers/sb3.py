@@ -20,7 +20,7 @@ from pinball_env.extras import require
 from pinball_env.vector_env import PinballVectorEnv
 
 require("stable_baselines3")
-from stable_baselines3.common.vec_env import VecEnv  # noqa: E402
+from stable_baselines3.common.vec_env import VecEnv, VecNormalize  # noqa: E402
 
 
 class SB3VecEnv(VecEnv):
@@ -151,3 +151,32 @@ def _per_env(infos: dict[str, Any], num_envs: int) -> list[dict[str, Any]]:
     keys = [key for key, value in infos.items() if isinstance(value, np.ndarray)]
     keys = [key for key in keys if not key.startswith("_") and key != "final_obs"]
     return [{key: infos[key][env] for key in keys} for env in range(num_envs)]
+
+
+class SB3VecNormalize(VecNormalize):
+    """stable-baselines3's ``VecNormalize``, bitwise, without its per-env Python loop: a step
+    normalises the terminal observations of the envs whose game ended, found with
+    ``np.flatnonzero``, rather than testing every env's ``done`` in Python. Saved and loaded as
+    ``VecNormalize`` is (``VecNormalize.load`` returns this class for what it saved)."""
+
+    def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+        obs, rewards, dones, infos = self.venv.step_wait()
+        self.old_obs = obs
+        self.old_reward = rewards
+        if self.training and self.norm_obs:
+            if isinstance(obs, dict) and isinstance(self.obs_rms, dict):
+                for key in self.obs_rms:
+                    self.obs_rms[key].update(obs[key])
+            else:
+                self.obs_rms.update(obs)
+        obs = self.normalize_obs(obs)
+        if self.training:
+            self._update_reward(rewards)
+        rewards = self.normalize_reward(rewards)
+        for env in np.flatnonzero(dones):
+            if "terminal_observation" in infos[env]:
+                infos[env]["terminal_observation"] = self.normalize_obs(
+                    infos[env]["terminal_observation"]
+                )
+        self.returns[dones] = 0
+        return obs, rewards, dones, infos
