@@ -180,10 +180,10 @@ def test_sb3_vec_video_recorder_on_procgen(tmp_path):
 
     from pinball_env.wrappers import SB3VecEnv
 
-    venv = SB3VecEnv(
+    venv = SB3VecEnv(  # every env's infos every step: the test reads each one's layout
         gym.make_vec("PinballProcgen-v0", num_envs=2, render_mode="rgb_array", **PROCGEN),
         step_infos=True,
-    )  # fmt: skip (every env's layout)
+    )
     recorder = VecVideoRecorder(venv, str(tmp_path), record_video_trigger=lambda s: s == 0,
                                 video_length=40)  # fmt: skip
     recorder.seed(0)
