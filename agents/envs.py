@@ -25,7 +25,7 @@ def make_env(
     step_infos: bool = True,
 ) -> Any:
     """The stable-baselines3 VecEnv a config trains on: the native vector env (``num_envs``
-    games, env i first reset with ``seed + i``), frame stacking, and ``VecNormalize``.
+    games, env i first reset with ``seed + i``), frame stacking, and ``SB3VecNormalize``.
 
     With ``stats`` (a saved ``VecNormalize``), its statistics are loaded and frozen, and rewards
     are left raw; with ``frozen`` (a policy's ``ObsNormalization``), observations are
