@@ -91,13 +91,19 @@ Merged = dict[str, list[dict[str, Any]]]
 
 @dataclasses.dataclass(frozen=True)
 class Method:
-    """A row of the benchmark: a training ``config`` (a file of configs/agents) or a
-    ``baseline``, on ``env_id``; ``tiny``: the overrides of ``--tiny``."""
+    """A row of the benchmark: a training ``config`` (a file of configs/agents) trained for
+    ``frames`` (one of the protocol's ``TRAINING_BUDGETS``) or a ``baseline``, on ``env_id``;
+    ``tiny``: the overrides of ``--tiny``."""
 
     env_id: str
     config: str | None = None
     baseline: str | None = None
     tiny: tuple[str, ...] = ()
+    frames: int = protocol.TRAINING_FRAMES
+
+    def __post_init__(self) -> None:
+        if self.frames not in protocol.TRAINING_BUDGETS:
+            raise ValueError(f"frames={self.frames}: not a budget of the protocol")
 
     @property
     def trained(self) -> bool:
@@ -113,6 +119,9 @@ METHODS: dict[str, Method] = {
     "random-v2": Method("Pinball-v2", baseline="random"),
     "heuristic-v2": Method("Pinball-v2", baseline="heuristic"),
     "ppo-scale-v2": Method("Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO),
+    "ppo-scale-v2-200m": Method(
+        "Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO, frames=protocol.LONG_TRAINING_FRAMES
+    ),
     "random-v1": Method("Pinball-v1", baseline="random"),
     "heuristic-v1": Method("Pinball-v1", baseline="heuristic"),
     "ppo-v1": Method("Pinball-v1", "ppo_v1.yaml", tiny=_TINY_PPO),
@@ -147,9 +156,9 @@ class Settings:
     episodes: int = len(protocol.EVAL_SEEDS)
     tiny: bool = False
 
-    @property
-    def frames(self) -> int:
-        return TINY_FRAMES if self.tiny else protocol.TRAINING_FRAMES
+    def frames(self, name: str) -> int:
+        """The frames method ``name`` trains for: its budget (--tiny: TINY_FRAMES)."""
+        return TINY_FRAMES if self.tiny else METHODS[name].frames
 
 
 def job_folder(settings: Settings, name: str, seed: int) -> Path:
@@ -157,11 +166,21 @@ def job_folder(settings: Settings, name: str, seed: int) -> Path:
     return settings.out / name / f"seed{seed}" if METHODS[name].trained else settings.out / name
 
 
+# Keys counted in steps that a method on the long budget scales with it (its schedules and
+# validations spread over ten times the frames).
+SCALED_BY_BUDGET = ("total_timesteps", "checkpoint_every", "validate_every")
+
+
 def job_config(name: str, seed: int, settings: Settings) -> TrainConfig:
-    """The training config of a job: the method's config, seed ``seed``, the protocol's budget
-    in frames and no time limit (and ``--tiny``'s settings)."""
+    """The training config of a job: the method's config, seed ``seed``, the method's budget in
+    frames and no time limit (and ``--tiny``'s settings). On a budget above the protocol's
+    first, the config's ``SCALED_BY_BUDGET`` keys are scaled by the budget's ratio to it."""
     method = METHODS[name]
-    overrides = [f"seed={seed}", "max_minutes=0", f"total_frames={settings.frames}"]
+    overrides = [f"seed={seed}", "max_minutes=0", f"total_frames={settings.frames(name)}"]
+    if method.frames != protocol.TRAINING_FRAMES and not settings.tiny:
+        config = load_config(CONFIGS / method.config)
+        ratio = method.frames // protocol.TRAINING_FRAMES
+        overrides += [f"{key}={getattr(config, key) * ratio}" for key in SCALED_BY_BUDGET]
     return load_config(
         CONFIGS / method.config, [*overrides, *(method.tiny if settings.tiny else ())]
     )
@@ -439,6 +458,7 @@ def method_results(
         return None
     metrics = protocol.aggregate([run["scores"] for run in runs], method.env_id)
     return {"env_id": method.env_id, "config": method.config, "baseline": method.baseline,
+            "training_frames": settings.frames(name) if method.trained else None,
             **metrics, "runs": runs}  # fmt: skip
 
 
@@ -520,7 +540,8 @@ def protocol_record(settings: Settings) -> dict[str, Any]:
         "env_ids": list(protocol.ENV_IDS),
         "repeat_action_probability": protocol.REPEAT_ACTION_PROBABILITY,
         "game": protocol.GAME_OPTIONS,
-        "training_frames": settings.frames,
+        "training_frames": TINY_FRAMES if settings.tiny else protocol.TRAINING_FRAMES,
+        "training_budgets": [TINY_FRAMES] if settings.tiny else list(protocol.TRAINING_BUDGETS),
         "eval_seeds": [first, first + settings.episodes - 1],
         "reference_scores": protocol.REFERENCE_SCORES,
         "human_scores": protocol.HUMAN_SCORES,
@@ -555,11 +576,11 @@ def aggregate_table(
     return table
 
 
-METHOD_COLUMNS = ("method", "env_id", "runs", "games", "score_mean", "score_mean_low",
-                  "score_mean_high", "score_iqm", "score_iqm_low", "score_iqm_high",
-                  "normalized_mean", "normalized_mean_low", "normalized_mean_high",
-                  "normalized_iqm", "normalized_iqm_low", "normalized_iqm_high",
-                  "train_minutes_mean")  # fmt: skip
+METHOD_COLUMNS = ("method", "env_id", "training_frames", "runs", "games", "score_mean",
+                  "score_mean_low", "score_mean_high", "score_iqm", "score_iqm_low",
+                  "score_iqm_high", "normalized_mean", "normalized_mean_low",
+                  "normalized_mean_high", "normalized_iqm", "normalized_iqm_low",
+                  "normalized_iqm_high", "train_minutes_mean")  # fmt: skip
 RUN_COLUMNS = ("method", "env_id", "seed", "run", "score_mean", "score_iqm", "frames", "steps",
                "train_minutes", "validation", "commit", "from")  # fmt: skip
 
@@ -567,8 +588,9 @@ RUN_COLUMNS = ("method", "env_id", "seed", "run", "score_mean", "score_iqm", "fr
 def _write_csvs(methods: dict[str, Any], out: Path) -> None:
     rows, run_rows = [], []
     for name, result in methods.items():
-        row = {"method": name, "env_id": result["env_id"], "runs": len(result["runs"]),
-               "games": result["games"]}  # fmt: skip
+        row = {"method": name, "env_id": result["env_id"],
+               "training_frames": result.get("training_frames") or "",
+               "runs": len(result["runs"]), "games": result["games"]}  # fmt: skip
         for key in ("score_mean", "score_iqm", "normalized_mean", "normalized_iqm"):
             row[key] = round(result[key], 3)
             row[f"{key}_low"], row[f"{key}_high"] = (round(v, 3) for v in result[f"{key}_ci95"])
@@ -693,7 +715,7 @@ def ship(
     if result is None or not METHODS[name].trained:
         raise ConfigError(f"{name}: no finished training run to ship in {settings.out}")
     runs = result["runs"]
-    short = [run["seed"] for run in runs if run["frames"] < 0.99 * settings.frames]
+    short = [run["seed"] for run in runs if run["frames"] < 0.99 * settings.frames(name)]
     if short or len(runs) < len(protocol.TRAINING_SEEDS):
         raise ConfigError(
             f"{name}: ships the best of at least {len(protocol.TRAINING_SEEDS)} runs trained for "

@@ -135,6 +135,10 @@ class PinballOptions(_Checked):
     """``"state"``, ``"rgb"`` or ``"grayscale"``."""
     action_type: str = _option("discrete", _choice(*ACTION_TYPES))
     """``"discrete"`` (``Discrete(4)``) or ``"multibinary"`` (``MultiBinary(2)``)."""
+    nudge_actions: bool = _option(True, checks.flag)
+    """Tables with the cabinet, discrete actions: False leaves out the 24 actions that nudge
+    (``Discrete(8)``: the flippers with or without the plunger, numbered as in the full set), as
+    ALE's minimal action set leaves out what a player need not press. The game is the same."""
     balls: int = _option(3, _at_least(1))
     """Balls per game (>= 1)."""
     reward_scale: float = _option(0.01, checks.finite)
@@ -176,6 +180,11 @@ class PinballOptions(_Checked):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if not self.nudge_actions and self.action_type != "discrete":
+            raise ValueError(
+                f"nudge_actions=False leaves out discrete actions, not buttons of "
+                f"action_type={self.action_type!r}"
+            )
         if self.rays and self.obs_type != "state":
             raise ValueError(
                 f"rays are part of the state observation, not of obs_type={self.obs_type!r}"

@@ -13,7 +13,8 @@ As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggre
   frame from each game's own random stream, so that no evaluation is a sequence an agent could
   learn by heart.
 - **Training**: :data:`TRAINING_FRAMES` frames per run (all envs' frames, a warm start's
-  included: what the shipped PPO trains in 38 minutes alone on 2 cores), :data:`TRAINING_SEEDS`
+  included: what the shipped PPO trains in 38 minutes alone on 2 cores), or the long budget,
+  :data:`LONG_TRAINING_FRAMES` (ALE's 200M), each row saying its budget; :data:`TRAINING_SEEDS`
   (at least 5 per method); training never plays a held-out game.
 - **Evaluation**: every run plays the :data:`EVAL_SEEDS` games (held out: seeds 100000-100099),
   its policy deterministic.
@@ -52,6 +53,10 @@ FIXED_OPTIONS = ("table", "balls", "max_frames", "physics", "max_episode_steps")
 # (``total_frames`` of a training config). The shipped PPO trains this in 38 minutes alone on a
 # 2-core machine (configs/agents/ppo_gentle_v1.yaml, seed 3: 37.8 minutes).
 TRAINING_FRAMES = 20_000_000
+# The second budget, ALE's 200M frames (Machado et al. 2018): what PPO learns when samples are
+# cheap (a recipe at the env's speed trains it in about half an hour on 2 cores).
+LONG_TRAINING_FRAMES = 200_000_000
+TRAINING_BUDGETS = (TRAINING_FRAMES, LONG_TRAINING_FRAMES)
 # The training seeds of every method (its config's ``seed``): at least 5.
 TRAINING_SEEDS = (0, 1, 2, 3, 4)
 # The held-out games: no training or validation game is one of them.
@@ -232,9 +237,11 @@ __all__ = [
     "FIXED_OPTIONS",
     "GAME_OPTIONS",
     "HUMAN_SCORES",
+    "LONG_TRAINING_FRAMES",
     "PROFILE_TAUS",
     "REFERENCE_SCORES",
     "REPEAT_ACTION_PROBABILITY",
+    "TRAINING_BUDGETS",
     "TRAINING_FRAMES",
     "TRAINING_SEEDS",
     "aggregate",

@@ -56,6 +56,8 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
     )
     saved = json.loads((out / "benchmark.json").read_text())
     assert saved["methods"]["ppo-v0"]["score_mean"] == ppo["score_mean"]
+    assert saved["methods"]["ppo-v0"]["training_frames"] == benchmark.TINY_FRAMES
+    assert saved["methods"]["random-v0"]["training_frames"] is None
     assert saved["protocol"]["repeat_action_probability"] == 0.25
     with open(out / "benchmark.csv") as file:
         rows = {row["method"]: row for row in csv.DictReader(file)}
@@ -64,6 +66,22 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
         assert len(list(csv.DictReader(file))) == 3  # two PPO runs, one random
     for picture in ("scores.png", "profiles.png"):
         assert (out / picture).stat().st_size > 10_000
+
+
+def test_a_method_on_the_long_budget_trains_its_config_ten_times_as_long(tmp_path):
+    settings = benchmark.Settings(tmp_path)
+    short = benchmark.job_config("ppo-scale-v2", 3, settings)
+    long = benchmark.job_config("ppo-scale-v2-200m", 3, settings)
+    assert benchmark.METHODS["ppo-scale-v2-200m"].config == benchmark.METHODS["ppo-scale-v2"].config
+    assert (short.total_frames, long.total_frames) == protocol.TRAINING_BUDGETS
+    assert long.total_frames == protocol.LONG_TRAINING_FRAMES == 200_000_000
+    for key in benchmark.SCALED_BY_BUDGET:  # the schedules and validations spread as far
+        assert getattr(long, key) == 10 * getattr(short, key), key
+    # What trains is otherwise the same config: its digest differs only by those keys.
+    scaled = {key: getattr(short, key) for key in ("total_frames", *benchmark.SCALED_BY_BUDGET)}
+    assert dataclasses.replace(long, **scaled) == short
+    with pytest.raises(ValueError, match="not a budget of the protocol"):
+        benchmark.Method("Pinball-v2", "ppo_scale_v2.yaml", frames=50_000_000)
 
 
 def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
@@ -184,7 +202,8 @@ def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path
         assert all(len(run["scores"]) == len(protocol.EVAL_SEEDS) for run in runs)
         if benchmark.METHODS[name].trained:
             assert len(runs) >= 3 and all(run["commit"] for run in runs)
-            assert all(run["frames"] >= 0.99 * protocol.TRAINING_FRAMES for run in runs)
+            budget = benchmark.METHODS[name].frames
+            assert all(run["frames"] >= 0.99 * budget for run in runs)
         # Its metrics are those of its scores.
         metrics = protocol.aggregate([run["scores"] for run in runs], result["env_id"])
         assert metrics.pop("runs") == len(runs)

@@ -387,6 +387,37 @@ def test_the_action_set_as_ale_names_it():
         assert buttons[3:].sum() == ("NUDGE" in meanings[action])
 
 
+def test_the_action_set_without_nudges_is_the_first_eight():
+    env = gym.make("Pinball-v2", nudge_actions=False)
+    full = gym.make("Pinball-v2").unwrapped
+    assert env.action_space == gym.spaces.Discrete(8)
+    assert env.unwrapped.get_action_meanings() == full.get_action_meanings()[:8]
+    buttons = env.unwrapped.game.discrete_buttons
+    np.testing.assert_array_equal(buttons, full.game.discrete_buttons[:8])
+    # An action of the smaller set plays as the same action of the full set.
+    np.testing.assert_array_equal(env.reset(seed=3)[0], full.reset(seed=3)[0])
+    for action in [4] * 60 + [0] * 200 + [3, 1, 2, 7, 5] * 40:
+        step, full_step = env.step(action), full.step(action)
+        np.testing.assert_array_equal(step[0], full_step[0])
+        assert step[1:4] == full_step[1:4]
+    with pytest.raises(ValueError, match=r"invalid action 8: expected an element of Discrete\(8\)"):
+        env.step(8)
+    assert sorted(set(env.unwrapped.get_keys_to_action().values())) == list(range(8))
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"id": "Pinball-v0", "nudge_actions": False}, "tables with the cabinet"),
+        ({"id": "Pinball-v2", "nudge_actions": False, "action_type": "multibinary"}, "discrete"),
+        ({"id": "Pinball-v2", "nudge_actions": "no"}, "nudge_actions"),
+    ],
+)
+def test_nudge_actions_off_where_there_is_nothing_to_leave_out_is_refused(options, message):
+    with pytest.raises(ValueError, match=message):
+        gym.make(**options)
+
+
 def test_spaces_of_pinball_v1():
     env = gym.make("Pinball-v1")
     assert env.action_space == gym.spaces.Discrete(32)

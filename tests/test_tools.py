@@ -29,12 +29,12 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "sb3_ppo_env_steps_per_second",
         "sb3_ppo_env_share",
         "sb3_ppo_learner_share",
-        "sb3_ppo_scale_v2_env_steps_per_second",
+        *(f"{prefix}_env_steps_per_second" for prefix in benchmark.SB3_CONFIGS),
         "v1_sb3chain1024_2thread_steps_per_second",
         "ratio_v1_sb3chain1024_2thread_to_v1_native1024_2thread",
     ):
         assert saved[key] == result[key] > 0, key
-    for prefix in ("sb3_ppo", "sb3_ppo_scale_v2"):
+    for prefix in benchmark.SB3_CONFIGS:
         shares = saved[f"{prefix}_env_share"] + saved[f"{prefix}_learner_share"]
         assert shares == pytest.approx(1.0)
     assert "compare" not in saved

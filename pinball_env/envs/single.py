@@ -55,6 +55,9 @@ class PinballEnv(CoreAttributes, gym.Env):
     | 16-23 | NUDGE_RIGHT and the same combinations                             |
     | 24-31 | NUDGE_UP and the same combinations                                |
 
+    ``nudge_actions=False`` leaves out the actions that nudge: ``Discrete(8)``, actions 0-7 above
+    (an agent that would rather not risk the tilt; ALE's minimal action set is the like).
+
     ``action_type="multibinary"``: ``MultiBinary(6)``, (left, right, plunger, nudge left,
     nudge right, nudge up); nudges pressed together shove along the sum of their directions
     (left and right cancel). The plunger: while its button is held it pulls back (the
@@ -263,6 +266,8 @@ class PinballEnv(CoreAttributes, gym.Env):
       and a drain (``"box"`` is a physics test box without them).
     - ``obs_type``: ``"state"``, ``"rgb"`` or ``"grayscale"``.
     - ``action_type``: ``"discrete"`` or ``"multibinary"``.
+    - ``nudge_actions``: with the cabinet and discrete actions, False leaves out the actions
+      that nudge (``Discrete(8)``; the game is the same).
     - ``balls``: balls per game (>= 1).
     - ``reward_scale``: reward per point.
     - ``height_shaping``: weight of the optional height shaping term (0 = off).
@@ -441,7 +446,8 @@ class PinballEnv(CoreAttributes, gym.Env):
                 codes = tuple(sorted(code for code, _ in combination))
                 if self.action_type == "discrete":
                     held = [i for i in nudges if pressed[i]]
-                    pressed[held[1:]] = False  # the first nudge wins
+                    # The first nudge wins; without nudge actions, nudge keys do nothing.
+                    pressed[held[1:] if self.options.nudge_actions else held] = False
                     mapping[codes] = discrete_action(pressed)
                 else:
                     mapping[codes] = pressed.astype(np.int8)
@@ -454,7 +460,7 @@ class PinballEnv(CoreAttributes, gym.Env):
         ``NUDGE_UP``, joined by ``_`` (action ``a``: flippers ``a & 3``, plunger bit 2, nudge
         ``a >> 3``). With ``action_type="multibinary"`` these are the discrete actions'
         names all the same; the buttons are ``game.button_names``."""
-        return action_meanings(self.game.cabinet)
+        return action_meanings(self.game.cabinet, self.options.nudge_actions)
 
     # --- what the env is playing -------------------------------------------------------------
 

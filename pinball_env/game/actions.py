@@ -28,9 +28,10 @@ def button_names(cabinet: bool) -> tuple[str, ...]:
     return BUTTONS + CABINET_BUTTONS if cabinet else BUTTONS
 
 
-def discrete_buttons(cabinet: bool) -> np.ndarray:
-    """(actions, buttons) bool, read-only: row ``a`` is the buttons discrete action ``a`` holds."""
-    n_actions = 32 if cabinet else 4
+def discrete_buttons(cabinet: bool, nudges: bool = True) -> np.ndarray:
+    """(actions, buttons) bool, read-only: row ``a`` is the buttons discrete action ``a`` holds;
+    without ``nudges``, a cabinet's first 8 actions, those that nudge left out."""
+    n_actions = (32 if nudges else 8) if cabinet else 4
     rows = np.zeros((n_actions, len(button_names(cabinet))), dtype=bool)
     for action in range(n_actions):
         rows[action, 0] = action & 1
@@ -44,11 +45,11 @@ def discrete_buttons(cabinet: bool) -> np.ndarray:
     return rows
 
 
-def action_meanings(cabinet: bool) -> list[str]:
+def action_meanings(cabinet: bool, nudges: bool = True) -> list[str]:
     """The name of every discrete action, as ALE's ``get_action_meanings``: ``NOOP``, or the
     buttons it holds joined by ``_`` (``LEFT_FLIPPER``, ``BOTH_FLIPPERS_PLUNGER_NUDGE_UP``)."""
     names = []
-    for action in range(len(discrete_buttons(cabinet))):
+    for action in range(len(discrete_buttons(cabinet, nudges))):
         parts = [_FLIPPER_NAMES[action & 3]]
         if cabinet:
             parts += ["PLUNGER" if action >> 2 & 1 else "", _NUDGE_NAMES[action >> 3]]

@@ -178,7 +178,11 @@ class Game:
         # The buttons: the flippers', and the cabinet's on a table that has one.
         self.cabinet = table.has_cabinet
         self.button_names = button_names(self.cabinet)
-        self.discrete_buttons = discrete_buttons(self.cabinet)
+        if not (self.cabinet or options.nudge_actions):
+            raise ValueError(
+                f"nudge_actions=False: an option of tables with the cabinet, not of {table.name!r}"
+            )
+        self.discrete_buttons = discrete_buttons(self.cabinet, options.nudge_actions)
         self._no_cabinet_buttons = np.zeros((n_envs, len(CABINET_BUTTONS)), dtype=bool)
         self._everyone = np.ones(n_envs, dtype=bool)
         self._rules: Rules | None = None  # the step loop's numbers (see _rules_now)

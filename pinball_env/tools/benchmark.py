@@ -26,11 +26,14 @@ Measures, with uniformly random actions on the classic table (state observations
 - table generation (``tablegen_ms_per_table``, ``tablegen_targets_ms_per_table``): milliseconds
   per generated table, drawn, validated and checked for playability (``generate_table`` called
   directly, no cache), the mean over 8 (``--quick``) or 32 seeds, without and with targets;
-- stable-baselines3 PPO training with the shipped ``configs/agents/ppo.yaml`` (``sb3_ppo``)
-  and with the recipe at the env's speed, ``configs/agents/ppo_scale_v2.yaml``
-  (``sb3_ppo_scale_v2``: 1024 envs of Pinball-v2), each with its env, its hyperparameters and
-  its threads (no warm start, validation or checkpoints), 2 (``--quick``) or 8 rollouts and
-  updates timed after an untimed one: ``PREFIX_env_steps_per_second``, and the shares of that
+- stable-baselines3 training (``SB3_CONFIGS``): PPO with the shipped ``configs/agents/ppo.yaml``
+  (``sb3_ppo``) and with the recipe at the env's speed, ``ppo_scale_v2.yaml``
+  (``sb3_ppo_scale_v2``: 1024 envs of Pinball-v2), A2C and DQN with the v1 recipes
+  (``sb3_a2c_v1``, ``sb3_dqn_v1``) and at the env's speed (``sb3_a2c_scale_v2``: 1024 envs;
+  ``sb3_dqn_scale_v2``: 256 envs, a gradient step of 2048 per vector step), each with its env,
+  its hyperparameters and its threads (no warm start, validation or checkpoints), 2
+  (``--quick``) or 8 iterations (rollouts and updates; DQN: 128 vector steps) timed after an
+  untimed one: ``PREFIX_env_steps_per_second``, and the shares of that
   wall time ``PREFIX_env_share`` (inside the VecEnv's ``step_async``, ``step_wait`` and
   ``reset``, ``VecNormalize`` included: the env as SB3 sees it) and ``PREFIX_learner_share``
   (the rest: the policy's forward passes in the rollouts, the buffer and its advantages,
@@ -110,6 +113,10 @@ RATIOS = (
 SB3_CONFIGS = {
     "sb3_ppo": Path("configs/agents/ppo.yaml"),
     "sb3_ppo_scale_v2": Path("configs/agents/ppo_scale_v2.yaml"),
+    "sb3_a2c_v1": Path("configs/agents/a2c_v1.yaml"),
+    "sb3_a2c_scale_v2": Path("configs/agents/a2c_scale_v2.yaml"),
+    "sb3_dqn_v1": Path("configs/agents/dqn_v1.yaml"),
+    "sb3_dqn_scale_v2": Path("configs/agents/dqn_scale_v2.yaml"),
 }
 SB3_FIGURES = ("env_steps_per_second", "env_share", "learner_share")
 TABLEGEN_FIGURES = ("tablegen_ms_per_table", "tablegen_targets_ms_per_table")
@@ -193,12 +200,14 @@ def measure_sb3(prefix: str, iterations: int) -> Figures:
     """stable-baselines3 training with the config ``SB3_CONFIGS[prefix]`` (beside this
     package), set up as ``agents.train`` does it (``load_config``, ``set_threads``: torch's
     threads are the config's; ``make_env`` as training's chain; the algorithm with
-    ``sb3_hyperparams``; no warm start, validation or checkpoints); one rollout and update
-    untimed, then ``iterations`` timed. Returns ``PREFIX_env_steps_per_second`` of the timed
-    ``learn`` call (wall time), ``PREFIX_env_share`` of it inside the VecEnv's ``step_async``,
-    ``step_wait`` and ``reset`` (the whole chain SB3 steps, ``VecNormalize`` included), and the
-    rest, ``PREFIX_learner_share``. Null without torch and stable-baselines3, or without the
-    config (an older revision)."""
+    ``sb3_hyperparams``; no warm start, validation or checkpoints); one iteration (on-policy:
+    a rollout and its update; off-policy: 128 vector steps and their gradient steps) untimed,
+    after off-policy's ``learning_starts``, then ``iterations`` timed. Returns
+    ``PREFIX_env_steps_per_second`` of the timed ``learn`` call (wall time),
+    ``PREFIX_env_share`` of it inside the VecEnv's ``step_async``, ``step_wait`` and ``reset``
+    (the whole chain SB3 steps, ``VecNormalize`` included), and the rest,
+    ``PREFIX_learner_share``. Null without torch and stable-baselines3, or without the config
+    (an older revision)."""
     names = [f"{prefix}_{figure}" for figure in SB3_FIGURES]
     root = Path(pinball_env.__file__).resolve().parent.parent
     if not (root / SB3_CONFIGS[prefix]).is_file():
@@ -227,8 +236,13 @@ def measure_sb3(prefix: str, iterations: int) -> Figures:
         config.policy, venv, seed=config.seed, device=config.device, verbose=0,
         **sb3_hyperparams(config),
     )  # fmt: skip
-    rollout = model.n_steps * model.n_envs
-    model.learn(rollout)  # outside the timing: the kernels' first calls, the first reset
+    if hasattr(model, "n_steps"):  # on-policy: an iteration is a rollout and its update
+        rollout = model.n_steps * model.n_envs
+        warmup = rollout
+    else:  # off-policy: an iteration is 128 vector steps, each with its gradient steps
+        rollout = 128 * model.train_freq.frequency * model.n_envs
+        warmup = model.learning_starts + rollout  # learning starts in the timing's first step
+    model.learn(warmup)  # outside the timing: the kernels' first calls, the first reset
     env = model.get_env()
     in_env = [0.0]
 
