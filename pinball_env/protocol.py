@@ -7,8 +7,8 @@ As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggre
   any sustained nudging trips); ``Pinball-v1`` (the same game with v1's tilt, which ignores
   one-way nudging) and ``Pinball-v0`` (flippers only), each a track of its own: each on its own
   table, 3 balls, a game of two minutes (:data:`GAME_OPTIONS`). An agent may choose how it sees
-  and acts (``obs_type``, ``frame_skip``, ``skip_above``, ``rays``, its reward shaping), not the
-  game.
+  and acts (``obs_type``, ``frame_skip``, ``skip_above``, ``rays``, ``nudge_actions``, its
+  reward shaping), not the game.
 - **Sticky actions** in evaluation: ``repeat_action_probability`` 0.25, as ALE v5, drawn frame by
   frame from each game's own random stream, so that no evaluation is a sequence an agent could
   learn by heart.
