@@ -114,6 +114,9 @@ class Method:
 _TINY = ("imitation_steps=0", "validate_every=0", "checkpoint_every=0", "env.num_envs=2")
 _TINY_PPO = (*_TINY, "hyperparams.n_steps=64", "hyperparams.batch_size=64",
              "hyperparams.n_epochs=1")  # fmt: skip
+_TINY_A2C = (*_TINY, "hyperparams.n_steps=8")
+_TINY_DQN = (*_TINY, "hyperparams.learning_starts=200", "hyperparams.buffer_size=2000",
+             "hyperparams.batch_size=64")  # fmt: skip
 
 METHODS: dict[str, Method] = {
     "random-v2": Method("Pinball-v2", baseline="random"),
@@ -122,6 +125,8 @@ METHODS: dict[str, Method] = {
     "ppo-scale-v2-200m": Method(
         "Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO, frames=protocol.LONG_TRAINING_FRAMES
     ),
+    "a2c-scale-v2": Method("Pinball-v2", "a2c_scale_v2.yaml", tiny=_TINY_A2C),
+    "dqn-scale-v2": Method("Pinball-v2", "dqn_scale_v2.yaml", tiny=_TINY_DQN),
     "random-v1": Method("Pinball-v1", baseline="random"),
     "heuristic-v1": Method("Pinball-v1", baseline="heuristic"),
     "ppo-v1": Method("Pinball-v1", "ppo_v1.yaml", tiny=_TINY_PPO),
@@ -133,12 +138,8 @@ METHODS: dict[str, Method] = {
     "ppo-close-v1": Method("Pinball-v1", "ppo_close_v1.yaml", tiny=_TINY_PPO),
     "ppo-broad-v1": Method("Pinball-v1", "ppo_broad_v1.yaml", tiny=_TINY_PPO),
     "ppo-anchor-v1": Method("Pinball-v1", "ppo_anchor_v1.yaml", tiny=_TINY_PPO),
-    "a2c-v1": Method("Pinball-v1", "a2c_v1.yaml", tiny=(*_TINY, "hyperparams.n_steps=8")),
-    "dqn-v1": Method(
-        "Pinball-v1",
-        "dqn_v1.yaml",
-        tiny=(*_TINY, "hyperparams.learning_starts=200", "hyperparams.buffer_size=2000"),
-    ),
+    "a2c-v1": Method("Pinball-v1", "a2c_v1.yaml", tiny=_TINY_A2C),
+    "dqn-v1": Method("Pinball-v1", "dqn_v1.yaml", tiny=_TINY_DQN),
     "ppo-pixels-v1": Method("Pinball-v1", "ppo_pixels_v1.yaml", tiny=_TINY_PPO),
     "random-v0": Method("Pinball-v0", baseline="random"),
     "heuristic-v0": Method("Pinball-v0", baseline="heuristic"),
