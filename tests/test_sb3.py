@@ -4,6 +4,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
 from pinball_env.wrappers import SB3VecEnv
@@ -150,3 +152,25 @@ def test_attributes_and_methods_are_each_envs_own():
         env.env_method("close_extras", indices=[0])
     with pytest.raises(AttributeError, match="read-only"):
         env.set_attr("layout", 1, indices=[0])
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    rows=st.integers(1, 2100),
+    columns=st.integers(2, 40),
+    dtype=st.sampled_from([np.float32, np.float64]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_the_compiled_normalisation_passes_are_numpys_bitwise(rows, columns, dtype, seed):
+    from pinball_env.wrappers.sb3 import batch_moments, normalized
+
+    rng = np.random.default_rng(seed)
+    scale = 10.0 ** rng.uniform(-3, 6, size=columns)  # features of very different sizes
+    obs = rng.standard_normal((rows, columns)) * scale + rng.uniform(-1e4, 1e4, columns)
+    obs = obs.astype(dtype)
+    mean, var = batch_moments(obs)
+    assert mean.tobytes() == np.mean(obs, axis=0).tobytes()
+    assert var.tobytes() == np.var(obs, axis=0).tobytes()
+    centre, std = rng.standard_normal(columns) * 100, np.sqrt(rng.uniform(0, 1e4, columns) + 1e-8)
+    expected = np.clip((obs - centre) / std, -10.0, 10.0).astype(np.float32)
+    assert normalized(obs, centre, std, 10.0).tobytes() == expected.tobytes()
