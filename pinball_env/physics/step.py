@@ -100,7 +100,7 @@ MIN_PROGRESS = 1e-9
 # ... and after this many in a row the ball is wedged: the rest of the substep is dropped.
 MAX_STALLED_PASSES = 4
 # Flipper contacts are found within this fraction of the skin from the surface.
-FLIPPER_TOLERANCE = 0.25
+FLIPPER_CONTACT_TOLERANCE = 0.25
 # Rounds of pushing a wedged ball out of the surfaces around it (see settle).
 SETTLE_ROUNDS = 8
 # The ball is moved without a sweep (out of a wedge) by at most this fraction of its radius, so
@@ -455,7 +455,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     """
     h = settings.dt / settings.substeps
     r = settings.radius
-    tol = FLIPPER_TOLERANCE * settings.skin
+    tol = FLIPPER_CONTACT_TOLERANCE * settings.skin
     segments, bounds = geometry.segments, geometry.segment_bounds
     one_sided, circles = geometry.segment_one_sided, geometry.circles
     flippers, sensors = geometry.flippers, geometry.sensors
