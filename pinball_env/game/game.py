@@ -283,11 +283,25 @@ class Game:
         frames. The step's points and drains (summed) are in :attr:`state`.
         """
         buttons = self.buttons(actions)
-        commands = buttons[:, self.world.flipper_buttons]
-        cabinet = buttons[:, len(BUTTONS) :] if self.cabinet else self._no_cabinet_buttons
-        progress = self.progress
         playing = self._everyone if frozen is None else ~frozen
+        self._start_step(playing, frozen is None, rngs)
+        self._play_frames(buttons, rngs)
+        progress = self.progress
         if frozen is None:
+            self.state.points[:] = progress.points
+            self.state.drained[:] = progress.drained
+            return progress.reward.copy(), self.state.balls_left == 0
+        self.state.points[playing] = progress.points[playing]
+        self.state.drained[playing] = progress.drained[playing]
+        return np.where(playing, progress.reward, 0.0), self.state.balls_left == 0
+
+    def _start_step(
+        self, playing: np.ndarray, everyone: bool, rngs: Sequence[np.random.Generator]
+    ) -> None:
+        """Set the envs that ``playing`` marks (all of them where ``everyone``) at a new step,
+        the others done, and draw the step's sticky-action draws from each env's stream."""
+        progress = self.progress
+        if everyone:
             progress.stage[:] = NEW_STEP
         else:
             progress.stage[:] = np.where(playing, NEW_STEP, STEP_DONE)
@@ -295,7 +309,14 @@ class Game:
             draws = progress.repeat_draws
             for env in np.flatnonzero(playing):
                 draws[env] = rngs[env].random(draws.shape[1])
-        params = self.step_parameters()
+
+    def _play_frames(self, buttons: np.ndarray, rngs: Sequence[np.random.Generator]) -> None:
+        """Run the compiled step loop with ``buttons`` held until every env's step is done,
+        doing what it hands back: launches (drawn from ``rngs``) and, unless swept, the
+        backend's physics of a frame (then :attr:`on_frame`)."""
+        commands = buttons[:, self.world.flipper_buttons]
+        cabinet = buttons[:, len(BUTTONS) :] if self.cabinet else self._no_cabinet_buttons
+        progress, params = self.progress, self.step_parameters()
         geometries, settings = self.world.tables.kernel_arrays()
         # With on_frame the loop hands each frame's physics to Python (the same kernel), and the
         # hook sees the frame.
@@ -325,13 +346,6 @@ class Game:
                     self.on_frame()
             elif len(launches) == 0:
                 break
-        if frozen is None:
-            self.state.points[:] = progress.points
-            self.state.drained[:] = progress.drained
-            return progress.reward.copy(), self.state.balls_left == 0
-        self.state.points[playing] = progress.points[playing]
-        self.state.drained[playing] = progress.drained[playing]
-        return np.where(playing, progress.reward, 0.0), self.state.balls_left == 0
 
     def out_of_time(self) -> np.ndarray:
         """(n_envs,) bool: the game has played ``max_frames`` frames (never, without)."""

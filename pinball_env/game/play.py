@@ -91,6 +91,9 @@ def play_frames_per_env(
               swept, start, stop)  # fmt: skip
 
 
+# The one function here over 60 lines, by design, as ``step_ball``: every frame of a step in one
+# compiled body, each record's arrays taken out once per call rather than once per helper and
+# frame (about 1.7x faster a frame of the plain env, measured; see the docstring's end).
 @njit(cache=True, inline="always")
 def play_step(
     geometries, settings, state, scratch, progress, params, commands, cabinet_buttons, swept,
