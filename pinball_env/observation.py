@@ -35,10 +35,10 @@ from pinball_env.table import Table
 MAX_OBS_SPEED = 20.0
 # Renderers kept per table (a renderer holds its table's static layer).
 CACHED_RENDERERS = 512
-# The cabinet's rows clip its offset to +-MAX_CABINET_OFFSET [m] and its velocity to
-# +-MAX_CABINET_SPEED [m/s]: a shove moves a real cabinet a few millimetres at a few dm/s.
-MAX_CABINET_OFFSET = 0.02
-MAX_CABINET_SPEED = 1.0
+# The cabinet's rows clip its offset to +-MAX_OBS_CABINET_OFFSET [m] and its velocity to
+# +-MAX_OBS_CABINET_SPEED [m/s]: a shove moves a real cabinet a few millimetres at a few dm/s.
+MAX_OBS_CABINET_OFFSET = 0.02
+MAX_OBS_CABINET_SPEED = 1.0
 # The rules' rows give the bonus in thousands of points and counters as counts, clipped to these.
 MAX_OBS_BONUS = 100.0
 MAX_OBS_COUNT = 100.0
@@ -77,7 +77,7 @@ class StateObserver:
                                    top_speed, [1.0, balls]])  # fmt: skip
         if self.game.cabinet:
             stroke = 1.0 if self.normalised else table.plunger.stroke
-            offset, speed = MAX_CABINET_OFFSET, MAX_CABINET_SPEED
+            offset, speed = MAX_OBS_CABINET_OFFSET, MAX_OBS_CABINET_SPEED
             low = np.concatenate([low, [0.0, 0.0, -offset, -offset, -speed, -speed, 0.0, 0.0]])
             high = np.concatenate(
                 [high, [stroke, 1.0, offset, offset, speed, speed, table.tilt.warnings + 1, 1.0]]
@@ -277,17 +277,17 @@ def cabinet_observation(pull, on_plunger, cabinet, warnings, tilted):
         for i in range(2):
             offset = cabinet[env, CABINET_X + i]
             speed = cabinet[env, CABINET_VX + i]
-            obs[env, 2 + i] = min(max(offset, -MAX_CABINET_OFFSET), MAX_CABINET_OFFSET)
-            obs[env, 4 + i] = min(max(speed, -MAX_CABINET_SPEED), MAX_CABINET_SPEED)
+            obs[env, 2 + i] = min(max(offset, -MAX_OBS_CABINET_OFFSET), MAX_OBS_CABINET_OFFSET)
+            obs[env, 4 + i] = min(max(speed, -MAX_OBS_CABINET_SPEED), MAX_OBS_CABINET_SPEED)
         obs[env, 6] = warnings[env]
         obs[env, 7] = tilted[env]
     return obs
 
 
 __all__ = [
-    "MAX_CABINET_OFFSET",
-    "MAX_CABINET_SPEED",
     "MAX_OBS_BONUS",
+    "MAX_OBS_CABINET_OFFSET",
+    "MAX_OBS_CABINET_SPEED",
     "MAX_OBS_COUNT",
     "MAX_OBS_SPEED",
     "ImageObserver",

@@ -15,6 +15,7 @@ from typing import Any
 from gymnasium.vector import AutoresetMode
 
 from pinball_env import checks
+from pinball_env.sim.backends import PHYSICS
 from pinball_env.sim.parallel import check_threads
 from pinball_env.table import Table
 
@@ -32,7 +33,6 @@ MAX_RAYS = 64
 GENERATED = "generated"
 OBS_TYPES = ("state", "rgb", "grayscale")
 ACTION_TYPES = ("discrete", "multibinary")
-PHYSICS = ("swept", "pymunk")
 RENDER_MODES = ("human", "rgb_array")
 from pinball_env.procgen import DIFFICULTIES  # noqa: E402
 

@@ -36,15 +36,17 @@ from typing import Any
 
 import numpy as np
 
+from pinball_env.options import GAME_FRAMES
+
 # The envs of the protocol: the whole cabinet with the tilt any sustained nudging trips first,
 # then v1's cabinet (whose tilt ignores one-way nudging) and the flippers-only game, as tracks.
 ENV_IDS = ("Pinball-v2", "Pinball-v1", "Pinball-v0")
 # ALE v5's sticky actions: each frame repeats the last one's buttons with this probability.
 REPEAT_ACTION_PROBABILITY = 0.25
 # The game every protocol evaluation plays, whatever the agent's own options: its table (the
-# env id's), 3 balls, two minutes (7200 frames at 60 Hz), the swept physics. An agent's config
+# env id's), 3 balls, two minutes (GAME_FRAMES), the swept physics. An agent's config
 # may not change these.
-GAME_OPTIONS: dict[str, Any] = {"balls": 3, "max_frames": 7200, "physics": "swept"}
+GAME_OPTIONS: dict[str, Any] = {"balls": 3, "max_frames": GAME_FRAMES, "physics": "swept"}
 # Env options that change the game rather than the agent's view of it (see check_agent_options):
 # the game's (a step limit would cut it short; the time is max_frames'); the sticky actions are
 # the protocol's whatever an agent trained with.

@@ -7,7 +7,7 @@ import pytest
 
 from pinball_env.physics.columns import BALL_VY, BALL_X, BALL_Y
 from pinball_env.physics.flipper import flipper_distance
-from pinball_env.physics.step import sensor_crossing
+from pinball_env.physics.targets import sensor_crossing
 from pinball_env.sim.backends import make_world
 from pinball_env.sim.world import World
 from pinball_env.table import load_table, table_from_dict

@@ -268,9 +268,15 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
         return tuple(self._seeds)
 
     @property
-    def table(self) -> Table:
-        """The table the envs were made with (``get_attr("table")`` gives each env's)."""
+    def first_table(self) -> Table:
+        """The table the envs were made with, whose ball, simulation and cabinet every env's
+        table shares (``get_attr("table")`` gives the table each env plays)."""
         return self.game.table
+
+    @property
+    def table(self) -> Table:
+        """:attr:`first_table`, under the name it had (kept for code that reads it)."""
+        return self.first_table
 
     @property
     def layout(self) -> np.ndarray | None:

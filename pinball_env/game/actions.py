@@ -8,8 +8,11 @@ without the plunger, with no nudge or one of the three. Action ``a`` holds flipp
 (bit 0 left, bit 1 right), the plunger if bit 2 is set, and nudge ``a >> 3`` (0 none, 1 left,
 2 right, 3 up), so the first four actions are the flipper-only ones of a table without a
 cabinet. The ``MultiBinary`` form presses any set of buttons; nudges pressed together shove
-the cabinet along the sum of their directions (left and right cancel).
+the cabinet along the sum of their directions (left and right cancel). :func:`decode_actions`
+turns a batch of actions into the buttons they hold.
 """
+
+from typing import Any
 
 import numpy as np
 
@@ -45,6 +48,12 @@ def discrete_buttons(cabinet: bool, nudges: bool = True) -> np.ndarray:
     return rows
 
 
+# A discrete action of a table without a cabinet is the flipper buttons held as bits: bit i is
+# button BUTTONS[i] (0 none, 1 left, 2 right, 3 both). Row a of DISCRETE_BUTTONS is action a's
+# buttons.
+DISCRETE_BUTTONS = discrete_buttons(cabinet=False)
+
+
 def action_meanings(cabinet: bool, nudges: bool = True) -> list[str]:
     """The name of every discrete action, as ALE's ``get_action_meanings``: ``NOOP``, or the
     buttons it holds joined by ``_`` (``LEFT_FLIPPER``, ``BOTH_FLIPPERS_PLUNGER_NUDGE_UP``)."""
@@ -68,3 +77,37 @@ def discrete_action(buttons: "list[bool] | tuple[bool, ...] | np.ndarray") -> in
             raise ValueError(f"a discrete action holds at most one nudge, got {buttons}")
         action |= int(pressed[2]) << 2 | (nudges[0] + 1 if nudges else 0) << 3
     return action
+
+
+class InvalidActions(ValueError):
+    """Actions that are not in the game's action space (raised before anything changes)."""
+
+
+def decode_actions(
+    actions: Any, action_type: str, discrete: np.ndarray, n_envs: int, n_buttons: int
+) -> np.ndarray:
+    """The (n_envs, buttons) bool buttons held by ``actions`` of ``action_type``: (n_envs,)
+    integers for ``"discrete"`` (rows of ``discrete``, see :func:`discrete_buttons`), (n_envs,
+    n_buttons) zeros and ones for ``"multibinary"``; else InvalidActions says what was
+    expected."""
+    actions = np.asarray(actions)
+    if action_type == "discrete":
+        n_actions = len(discrete)
+        valid = (
+            actions.shape == (n_envs,)
+            and actions.dtype.kind in "biu"  # Gymnasium's Discrete takes True as 1
+            and actions.min() >= 0
+            and actions.max() < n_actions
+        )
+        if valid:  # (as integers: a bool array would index as a mask)
+            return discrete[actions.astype(np.intp)]
+        expected = f"({n_envs},) integers in [0, {n_actions})"
+    else:
+        shape = (n_envs, n_buttons)
+        if actions.shape == shape and np.all((actions == 0) | (actions == 1)):
+            return actions.astype(bool)
+        expected = f"{shape} zeros and ones"
+    raise InvalidActions(
+        f"invalid actions: expected {expected} for action_type={action_type!r}, "
+        f"got shape {actions.shape} dtype {actions.dtype}"
+    )

@@ -29,7 +29,10 @@ from pinball_env.physics.columns import (
     BOUND_X,
     BOUND_Y,
     CABINET_STATE_SIZE,
+    CONTACT_ELEMENT,
     CONTACT_SIZE,
+    CONTACT_SPEED,
+    CONTACT_TIME,
     SPIN_STATE_SIZE,
 )
 
@@ -156,6 +159,17 @@ def first_kickback(geometry):
 def element_count(geometry):
     """Number of elements of every kind."""
     return first_kickback(geometry) + geometry.kickbacks.shape[0]
+
+
+@njit(cache=True, inline="always")
+def log_contact(state, env, element, time, speed):
+    """Append a contact to env's log (counting it even when the log is full)."""
+    row = state.contact_count[env]
+    if row < state.contacts.shape[1]:
+        state.contacts[env, row, CONTACT_ELEMENT] = element
+        state.contacts[env, row, CONTACT_TIME] = time
+        state.contacts[env, row, CONTACT_SPEED] = speed
+    state.contact_count[env] = row + 1
 
 
 def segment_bounds(segments: np.ndarray) -> np.ndarray:

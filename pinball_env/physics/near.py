@@ -37,8 +37,8 @@ from pinball_env.physics.sweep import norm, segment_offset
 # fewer gathers, each over every element, against more candidates in every sweep; measured).
 NEAR_TIME = 0.02
 # The sweeps find contacts within the ball's radius of a surface, flipper contacts within half
-# the skin more (FLIPPER_TOLERANCE twice): twice the skin, and a nanometre for rounding, covers
-# both [m].
+# the skin more (step.FLIPPER_CONTACT_TOLERANCE twice): twice the skin, and a nanometre for
+# rounding, covers both [m].
 NEAR_SKINS = 2.0
 NEAR_ROUNDING = 1e-9
 # Groups of a set, in order, each ending at its entry of ``Scratch.near_ends``.

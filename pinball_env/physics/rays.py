@@ -36,19 +36,12 @@ RAY_RANGE = 0.5
 _MARGIN = 1e-9
 
 
-@njit(cache=True)
-def cast_rays(x, y, directions, geometry, flipper_angles, out, bounds, order, sides):
-    """Distances from (x, y) along ``directions`` (:func:`ray_directions`) to the first wall,
-    post or flipper (its capsule at ``flipper_angles``: base and tip circles and the two
-    sides), in RAY_RANGE (1: nothing within it), written to ``out``.
-
-    Each ray's distance is the least over the elements, as tested one by one; the elements are
-    taken nearest first (by a lower bound of their distance from the point: ``bounds`` and
-    ``order``, work arrays as long as the table has walls, posts and flippers), and a ray stops
-    at the first whose bound is beyond what it has found, so the distances are bitwise those of
-    testing every element. ``sides``: a work array, (flippers, 2)."""
+@njit(cache=True, inline="always")
+def nearest_first(x, y, geometry, bounds, order):
+    """The walls, posts and flippers (element ids in ``order``) that a ray from (x, y) may meet
+    within RAY_RANGE, nearest first by a lower bound of their distance (in ``bounds``); returns
+    how many. A NaN point keeps every element, its bound -inf."""
     segments, circles, flippers = geometry.segments, geometry.circles, geometry.flippers
-    segment_bounds = geometry.segment_bounds
     n_segments, n_circles = segments.shape[0], circles.shape[0]
     limit = RAY_RANGE * (1.0 + _MARGIN)
     n = 0
@@ -75,6 +68,24 @@ def cast_rays(x, y, directions, geometry, flipper_angles, out, bounds, order, si
         elif not bound > limit:
             bounds[n], order[n] = -math.inf, e
             n += 1
+    return n
+
+
+@njit(cache=True)
+def cast_rays(x, y, directions, geometry, flipper_angles, out, bounds, order, sides):
+    """Distances from (x, y) along ``directions`` (:func:`ray_directions`) to the first wall,
+    post or flipper (its capsule at ``flipper_angles``: base and tip circles and the two
+    sides), in RAY_RANGE (1: nothing within it), written to ``out``.
+
+    Each ray's distance is the least over the elements, as tested one by one; the elements are
+    taken nearest first (by a lower bound of their distance from the point: ``bounds`` and
+    ``order``, work arrays as long as the table has walls, posts and flippers), and a ray stops
+    at the first whose bound is beyond what it has found, so the distances are bitwise those of
+    testing every element. ``sides``: a work array, (flippers, 2)."""
+    segments, circles, flippers = geometry.segments, geometry.circles, geometry.flippers
+    segment_bounds = geometry.segment_bounds
+    n_segments, n_circles = segments.shape[0], circles.shape[0]
+    n = nearest_first(x, y, geometry, bounds, order)
     for j in range(flippers.shape[0]):  # each flipper's direction, for every ray
         sides[j, 0], sides[j, 1] = math.cos(flipper_angles[j]), math.sin(flipper_angles[j])
     for k in range(directions.shape[0]):

@@ -22,7 +22,7 @@ it. A sound state thus stays sound, substep by substep. A
 flipper sweep that runs out of slices (an absurd speed) ends the substep the same way, so the
 work of a frame is bounded whatever the state. Sensors (rollovers, the drain) are crossed, not
 collided with: a crossing of the ball's centre is an event, and a drain crossing takes the ball
-out of play (:func:`record_crossings`).
+out of play (``targets.record_crossings``).
 
 Contact response (per unit mass, relative to the velocity of the surface, zero except on a
 swinging flipper): the normal velocity is reflected with restitution ``e`` (``e = 0`` below
@@ -45,15 +45,6 @@ from pinball_env.physics.columns import (
     BALL_VY,
     BALL_X,
     BALL_Y,
-    BOUND_NX,
-    BOUND_NY,
-    BOUND_OFFSET,
-    BOUND_RADIUS,
-    BOUND_X,
-    BOUND_Y,
-    CONTACT_ELEMENT,
-    CONTACT_SPEED,
-    CONTACT_TIME,
     FLIPPER_BASE_RADIUS,
     FLIPPER_DOWN_SPEED,
     FLIPPER_LENGTH,
@@ -73,8 +64,8 @@ from pinball_env.physics.data import (
     first_circle,
     first_drop_target,
     first_flipper,
-    first_kickback,
     first_sensor,
+    log_contact,
 )
 from pinball_env.physics.flipper import flipper_distance, flipper_reach, sweep_flipper
 from pinball_env.physics.near import (
@@ -89,11 +80,17 @@ from pinball_env.physics.near import (
 from pinball_env.physics.sweep import (
     INF,
     norm,
+    segment_contact,
     segment_offset,
     sweep_circle,
-    sweep_segment,
 )
-from pinball_env.physics.targets import spin_spinner, update_targets
+from pinball_env.physics.targets import (
+    cross_target_lines,
+    record_crossings,
+    sensor_crossing,
+    sweep_drop_targets,
+    update_targets,
+)
 
 # For a solid sphere, the share of the contact-point slip one friction impulse can remove:
 # 1 / (1 + m r^2 / I) with I = 2/5 m r^2. The remaining 5/7 goes into spin.
@@ -103,7 +100,7 @@ MIN_PROGRESS = 1e-9
 # ... and after this many in a row the ball is wedged: the rest of the substep is dropped.
 MAX_STALLED_PASSES = 4
 # Flipper contacts are found within this fraction of the skin from the surface.
-FLIPPER_TOLERANCE = 0.25
+FLIPPER_CONTACT_TOLERANCE = 0.25
 # Rounds of pushing a wedged ball out of the surfaces around it (see settle).
 SETTLE_ROUNDS = 8
 # The ball is moved without a sweep (out of a wedge) by at most this fraction of its radius, so
@@ -151,17 +148,6 @@ def is_hit(speed, kick, resting_speed):
     """Whether a contact is a hit (a scoring event): the ball strikes the surface, rather than
     lying or rolling on it, or the surface kicks."""
     return speed >= resting_speed or kick > 0.0
-
-
-@njit(cache=True, inline="always")
-def log_contact(state, env, element, time, speed):
-    """Append a contact to env's log (counting it even when the log is full)."""
-    row = state.contact_count[env]
-    if row < state.contacts.shape[1]:
-        state.contacts[env, row, CONTACT_ELEMENT] = element
-        state.contacts[env, row, CONTACT_TIME] = time
-        state.contacts[env, row, CONTACT_SPEED] = speed
-    state.contact_count[env] = row + 1
 
 
 # --- the elements ---------------------------------------------------------------------------------
@@ -270,26 +256,6 @@ def flipper_end(start, target, omega, stop, held, held_time, h):
 # --- sweeping: the earliest contact --------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
-def segment_contact(x, y, dx, dy, r, travel, segment, bounds, one_sided):
-    """:func:`sweep_segment` of a segment (a row of ``Geometry.segments``), after two cheap
-    tests with its row of bounds (``data.segment_bounds``) that rule out most: a segment whose
-    bounding circle is out of the sweep's reach (``travel`` its length), or whose line the
-    path stays on one side of, farther than the ball's radius, cannot be touched (``t = inf``).
-    The margins cover rounding in these tests."""
-    mx = x - bounds[BOUND_X]
-    my = y - bounds[BOUND_Y]
-    reach = r + travel + bounds[BOUND_RADIUS]
-    if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
-        return INF, 0.0, 0.0
-    d0 = bounds[BOUND_NX] * x + bounds[BOUND_NY] * y - bounds[BOUND_OFFSET]
-    d1 = d0 + bounds[BOUND_NX] * dx + bounds[BOUND_NY] * dy
-    clear = r * (1.0 + 1e-9) + 1e-12
-    if (d0 > clear and d1 > clear) or (d0 < -clear and d1 < -clear):
-        return INF, 0.0, 0.0
-    return sweep_segment(x, y, dx, dy, r, segment[0], segment[1], segment[2], segment[3], one_sided)
-
-
 @njit(cache=True)
 def earliest_static_contact(x, y, dx, dy, r, segments, segment_bounds, segment_one_sided, circles):
     """Earliest contact of a ball sweeping from (x, y) by (dx, dy) with the walls and posts.
@@ -378,140 +344,6 @@ def earliest_flipper_contact(
         if tau < best_tau:
             best_tau, best_nx, best_ny, best_svx, best_svy, best = tau, nx, ny, svx, svy, j
     return best_tau, best_nx, best_ny, best_svx, best_svy, best
-
-
-# --- sensors --------------------------------------------------------------------------------------
-
-
-@njit(cache=True)
-def sensor_crossing(x, y, dx, dy, sensor):
-    """Fraction of the move (x, y) -> (x + dx, y + dy) at which the centre crosses a sensor.
-
-    Half-open: a point exactly on the sensor line counts as behind it (the side opposite its
-    normal), so a path that ends on the line and goes on is counted once. ``inf`` for none.
-    """
-    x0 = sensor[0]
-    y0 = sensor[1]
-    ex = sensor[2] - x0
-    ey = sensor[3] - y0
-    side0 = ex * (y - y0) - ey * (x - x0)
-    side1 = ex * (y + dy - y0) - ey * (x + dx - x0)
-    if (side0 > 0.0) == (side1 > 0.0):
-        return INF
-    u = side0 / (side0 - side1)
-    along = ((x + dx * u - x0) * ex + (y + dy * u - y0) * ey) / (ex * ex + ey * ey)
-    if along < 0.0 or along >= 1.0:  # half-open too: sensors meeting end to end count once
-        return INF
-    return u
-
-
-@njit(cache=True)
-def cross_sensors(x, y, dx, dy, sensors, sensor_drain, crossings):
-    """Fractions of the move (x, y) -> (x + dx, y + dy) at which the centre crosses each sensor,
-    written to ``crossings`` (inf for none). Returns the earliest drain crossing (inf for none):
-    the ball leaves play there, so only crossings up to it happen."""
-    drain = INF
-    for j in range(sensors.shape[0]):
-        crossings[j] = sensor_crossing(x, y, dx, dy, sensors[j])
-        if sensor_drain[j] and crossings[j] < drain:
-            drain = crossings[j]
-    return drain
-
-
-@njit(cache=True)
-def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings):
-    """Count and log env's sensor crossings on the move (x, y) -> (x + dx, y + dy), made over
-    ``duration`` seconds from ``start`` [s into the frame]; those past a drain crossing do not
-    happen. Returns the fraction of the move at the drain crossing (inf for none)."""
-    drain = cross_sensors(x, y, dx, dy, geometry.sensors, geometry.sensor_drain, crossings)
-    offset = first_sensor(geometry)
-    for j in range(geometry.sensors.shape[0]):  # the row may be longer (see step_tables)
-        if crossings[j] <= drain and crossings[j] < INF:
-            state.hits[env, offset + j] += 1
-            log_contact(state, env, offset + j, start + duration * crossings[j], 0.0)
-    return drain
-
-
-@njit(cache=True)
-def kickback_crossing(x, y, vx, vy, duration, kickbacks, lit):
-    """The first lit kickback whose line the ball moving at (vx, vy) from (x, y) for
-    ``duration`` seconds crosses against its kick, and the fraction of the move where:
-    ``(kickback, fraction)``, ``(-1, inf)`` for none."""
-    best, best_u = -1, INF
-    for j in range(kickbacks.shape[0]):
-        kick = kickbacks[j]
-        if lit[j] and vx * kick[KICKBACK_VX] + vy * kick[KICKBACK_VY] < 0.0:
-            u = sensor_crossing(x, y, vx * duration, vy * duration, kick)
-            if u < best_u:
-                best, best_u = j, u
-    return best, best_u
-
-
-@njit(cache=True)
-def count_kickbacks(state, env, x, y, vx, vy, duration, kickbacks, lit, kickback_id, time):
-    """Count (as hits) and log the dark kickbacks' lines that the move from (x, y) at (vx, vy)
-    for ``duration`` seconds crossed against their kick; ``time`` is the move's end [s into the
-    frame]. (A lit one crossed fires, see ``step_ball``.)"""
-    for j in range(kickbacks.shape[0]):
-        kick = kickbacks[j]
-        against = vx * kick[KICKBACK_VX] + vy * kick[KICKBACK_VY] < 0.0
-        if (
-            not lit[j]
-            and against
-            and sensor_crossing(x, y, vx * duration, vy * duration, kick) < INF
-        ):
-            state.hits[env, kickback_id + j] += 1
-            log_contact(state, env, kickback_id + j, time, 0.0)
-
-
-@njit(cache=True)
-def sweep_drop_targets(
-    state, env, geometry, x, y, dx, dy, r, t, nx, ny, svx, svy, element, cut, near, start, stop
-):  # fmt: skip
-    """The pass's earliest contact ``(t, nx, ny, svx, svy, element, cut)`` (as found over the
-    other solids) with env ``env``'s standing drop targets of its candidate set (indexes
-    ``near[start:stop]``) swept too, the ball moving from (x, y) by (dx, dy); ties go to the
-    lower id (the others')."""
-    targets, bounds, up = geometry.drop_targets, geometry.drop_target_bounds, state.targets_up
-    travel = math.sqrt(dx * dx + dy * dy)
-    first = first_drop_target(geometry)
-    for k in range(start, stop):
-        j = near[k]
-        if not up[env, j]:
-            continue
-        tt, tnx, tny = segment_contact(x, y, dx, dy, r, travel, targets[j], bounds[j], False)
-        if tt < t:
-            t, nx, ny, svx, svy, element, cut = tt, tnx, tny, 0.0, 0.0, first + j, False
-    return t, nx, ny, svx, svy, element, cut
-
-
-@njit(cache=True)
-def cross_target_lines(state, env, geometry, x, y, vx, vy, used, start):
-    """The spinner and kickback lines of env ``env`` on the ball's move from (x, y) at (vx, vy)
-    for ``used`` seconds, from ``start`` [s into the frame]. A lit kickback's line crossed
-    against its kick ends the move there: it fires (the caller gives the ball its kick) and goes
-    dark. Each spinner crossed is spun (``physics.targets.spin_spinner``); each kickback line
-    crossed against its kick is a hit, lit or not. Returns ``(kicked, used)``: the kickback
-    that fired (-1: none) and the move's time, cut short at its line."""
-    kickbacks, lit = geometry.kickbacks, state.kickback_lit[env]
-    kicked = -1
-    if kickbacks.shape[0] > 0:
-        kicked, u = kickback_crossing(x, y, vx, vy, used, kickbacks, lit)
-        if kicked >= 0:
-            used *= u
-        count_kickbacks(state, env, x, y, vx, vy, used, kickbacks, lit,
-                        first_kickback(geometry), start + used)  # fmt: skip
-    spinners = geometry.spinners
-    for j in range(spinners.shape[0]):
-        u = sensor_crossing(x, y, vx * used, vy * used, spinners[j])
-        if u < INF:
-            spin_spinner(spinners[j], state.spinners[env, j], vx, vy, start + used * u)
-    if kicked >= 0:
-        element = first_kickback(geometry) + kicked
-        state.hits[env, element] += 1
-        log_contact(state, env, element, start + used, 0.0)
-        lit[kicked] = False
-    return kicked, used
 
 
 # --- one ball ------------------------------------------------------------------------------------
@@ -605,6 +437,9 @@ def settle(x, y, geometry, angles, up, r, skin):
     return x, y
 
 
+# The one function here over 60 lines, by design: the hot loop of every ball-frame. numba counts
+# a reference for each array a helper receives, so helpers over arrays here would cost more than
+# the physics (4-5x per ball-frame, measured); the docstring says which helpers it does call.
 @njit(cache=True, inline="always")
 def step_ball(geometry, settings, state, scratch, env, flipper_id):
     """Advance env ``env`` by one frame in place: its flippers, and its ball if in play.
@@ -623,7 +458,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     """
     h = settings.dt / settings.substeps
     r = settings.radius
-    tol = FLIPPER_TOLERANCE * settings.skin
+    tol = FLIPPER_CONTACT_TOLERANCE * settings.skin
     segments, bounds = geometry.segments, geometry.segment_bounds
     one_sided, circles = geometry.segment_one_sided, geometry.circles
     flippers, sensors = geometry.flippers, geometry.sensors

@@ -25,6 +25,15 @@ import math
 import numpy as np
 from numba import njit
 
+from pinball_env.physics.columns import (
+    BOUND_NX,
+    BOUND_NY,
+    BOUND_OFFSET,
+    BOUND_RADIUS,
+    BOUND_X,
+    BOUND_Y,
+)
+
 INF = math.inf
 # A one-sided segment stops only a ball whose centre starts at least this share of its radius in
 # front of it (a resting ball, r + skin away, is well clear of the margin).
@@ -163,6 +172,26 @@ def sweep_segment(cx, cy, dx, dy, r, x0, y0, x1, y1, one_sided):
 def sweep_circle(cx, cy, dx, dy, r, ox, oy, radius):
     """Ball of radius ``r`` moving from ``c`` by ``d`` against a static circle (post, bumper)."""
     return sweep_point(cx, cy, dx, dy, r + radius, ox, oy)
+
+
+@njit(cache=True, inline="always")
+def segment_contact(x, y, dx, dy, r, travel, segment, bounds, one_sided):
+    """:func:`sweep_segment` of a segment (a row of ``Geometry.segments``), after two cheap
+    tests with its row of bounds (``data.segment_bounds``) that rule out most: a segment whose
+    bounding circle is out of the sweep's reach (``travel`` its length), or whose line the
+    path stays on one side of, farther than the ball's radius, cannot be touched (``t = inf``).
+    The margins cover rounding in these tests."""
+    mx = x - bounds[BOUND_X]
+    my = y - bounds[BOUND_Y]
+    reach = r + travel + bounds[BOUND_RADIUS]
+    if mx * mx + my * my > reach * reach * (1.0 + 1e-12):
+        return INF, 0.0, 0.0
+    d0 = bounds[BOUND_NX] * x + bounds[BOUND_NY] * y - bounds[BOUND_OFFSET]
+    d1 = d0 + bounds[BOUND_NX] * dx + bounds[BOUND_NY] * dy
+    clear = r * (1.0 + 1e-9) + 1e-12
+    if (d0 > clear and d1 > clear) or (d0 < -clear and d1 < -clear):
+        return INF, 0.0, 0.0
+    return sweep_segment(x, y, dx, dy, r, segment[0], segment[1], segment[2], segment[3], one_sided)
 
 
 def _as_point(name: str, value: np.ndarray) -> tuple[float, float]:

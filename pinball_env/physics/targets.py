@@ -15,8 +15,10 @@
   the kick's direction is a hit; while the kickback is lit (``State.kickback_lit``) that ball
   leaves the line at the kick velocity, and the kickback goes dark. The rules light it.
 
-The kernel (``step.step_ball``) sweeps standing drop targets with the walls, tests spinner and
-kickback lines as it tests sensors, and calls :func:`update_targets` once a frame.
+Every crossing is here: the sensors' (rollovers, the drain: :func:`record_crossings`), the
+spinner and kickback lines' (:func:`cross_target_lines`) and the standing drop targets' sweep
+(:func:`sweep_drop_targets`). The kernel (``step.step_ball``) calls them in each contact pass,
+and :func:`update_targets` once a frame.
 """
 
 import math
@@ -24,6 +26,8 @@ import math
 from numba import njit
 
 from pinball_env.physics.columns import (
+    KICKBACK_VX,
+    KICKBACK_VY,
     SPIN_ANGLE,
     SPIN_OMEGA,
     SPINNER_DAMPING,
@@ -34,8 +38,14 @@ from pinball_env.physics.columns import (
     SPINNER_Y0,
     SPINNER_Y1,
 )
-from pinball_env.physics.data import first_spinner
-from pinball_env.physics.sweep import point_segment_distance
+from pinball_env.physics.data import (
+    first_drop_target,
+    first_kickback,
+    first_sensor,
+    first_spinner,
+    log_contact,
+)
+from pinball_env.physics.sweep import INF, point_segment_distance, segment_contact
 
 TWO_PI = 2.0 * math.pi
 
@@ -117,3 +127,137 @@ def update_targets(geometry, state, env, x, y, r, dt):
         turns = turn_spinner(geometry.spinners[j], state.spinners[env, j], dt)
         state.hits[env, spinner_id + j] += turns
     raise_banks(geometry, state, env, x, y, r, dt)
+
+
+# --- crossings: sensors, kickbacks, drop targets --------------------------------------------------
+
+
+@njit(cache=True)
+def sensor_crossing(x, y, dx, dy, sensor):
+    """Fraction of the move (x, y) -> (x + dx, y + dy) at which the centre crosses a sensor.
+
+    Half-open: a point exactly on the sensor line counts as behind it (the side opposite its
+    normal), so a path that ends on the line and goes on is counted once. ``inf`` for none.
+    """
+    x0 = sensor[0]
+    y0 = sensor[1]
+    ex = sensor[2] - x0
+    ey = sensor[3] - y0
+    side0 = ex * (y - y0) - ey * (x - x0)
+    side1 = ex * (y + dy - y0) - ey * (x + dx - x0)
+    if (side0 > 0.0) == (side1 > 0.0):
+        return INF
+    u = side0 / (side0 - side1)
+    along = ((x + dx * u - x0) * ex + (y + dy * u - y0) * ey) / (ex * ex + ey * ey)
+    if along < 0.0 or along >= 1.0:  # half-open too: sensors meeting end to end count once
+        return INF
+    return u
+
+
+@njit(cache=True)
+def cross_sensors(x, y, dx, dy, sensors, sensor_drain, crossings):
+    """Fractions of the move (x, y) -> (x + dx, y + dy) at which the centre crosses each sensor,
+    written to ``crossings`` (inf for none). Returns the earliest drain crossing (inf for none):
+    the ball leaves play there, so only crossings up to it happen."""
+    drain = INF
+    for j in range(sensors.shape[0]):
+        crossings[j] = sensor_crossing(x, y, dx, dy, sensors[j])
+        if sensor_drain[j] and crossings[j] < drain:
+            drain = crossings[j]
+    return drain
+
+
+@njit(cache=True)
+def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings):
+    """Count and log env's sensor crossings on the move (x, y) -> (x + dx, y + dy), made over
+    ``duration`` seconds from ``start`` [s into the frame]; those past a drain crossing do not
+    happen. Returns the fraction of the move at the drain crossing (inf for none)."""
+    drain = cross_sensors(x, y, dx, dy, geometry.sensors, geometry.sensor_drain, crossings)
+    offset = first_sensor(geometry)
+    for j in range(geometry.sensors.shape[0]):  # the row may be longer (see step_tables)
+        if crossings[j] <= drain and crossings[j] < INF:
+            state.hits[env, offset + j] += 1
+            log_contact(state, env, offset + j, start + duration * crossings[j], 0.0)
+    return drain
+
+
+@njit(cache=True)
+def kickback_crossing(x, y, vx, vy, duration, kickbacks, lit):
+    """The first lit kickback whose line the ball moving at (vx, vy) from (x, y) for
+    ``duration`` seconds crosses against its kick, and the fraction of the move where:
+    ``(kickback, fraction)``, ``(-1, inf)`` for none."""
+    best, best_u = -1, INF
+    for j in range(kickbacks.shape[0]):
+        kick = kickbacks[j]
+        if lit[j] and vx * kick[KICKBACK_VX] + vy * kick[KICKBACK_VY] < 0.0:
+            u = sensor_crossing(x, y, vx * duration, vy * duration, kick)
+            if u < best_u:
+                best, best_u = j, u
+    return best, best_u
+
+
+@njit(cache=True)
+def count_kickbacks(state, env, x, y, vx, vy, duration, kickbacks, lit, kickback_id, time):
+    """Count (as hits) and log the dark kickbacks' lines that the move from (x, y) at (vx, vy)
+    for ``duration`` seconds crossed against their kick; ``time`` is the move's end [s into the
+    frame]. (A lit one crossed fires, see ``step_ball``.)"""
+    for j in range(kickbacks.shape[0]):
+        kick = kickbacks[j]
+        against = vx * kick[KICKBACK_VX] + vy * kick[KICKBACK_VY] < 0.0
+        if (
+            not lit[j]
+            and against
+            and sensor_crossing(x, y, vx * duration, vy * duration, kick) < INF
+        ):
+            state.hits[env, kickback_id + j] += 1
+            log_contact(state, env, kickback_id + j, time, 0.0)
+
+
+@njit(cache=True)
+def sweep_drop_targets(
+    state, env, geometry, x, y, dx, dy, r, t, nx, ny, svx, svy, element, cut, near, start, stop
+):  # fmt: skip
+    """The pass's earliest contact ``(t, nx, ny, svx, svy, element, cut)`` (as found over the
+    other solids) with env ``env``'s standing drop targets of its candidate set (indexes
+    ``near[start:stop]``) swept too, the ball moving from (x, y) by (dx, dy); ties go to the
+    lower id (the others')."""
+    targets, bounds, up = geometry.drop_targets, geometry.drop_target_bounds, state.targets_up
+    travel = math.sqrt(dx * dx + dy * dy)
+    first = first_drop_target(geometry)
+    for k in range(start, stop):
+        j = near[k]
+        if not up[env, j]:
+            continue
+        tt, tnx, tny = segment_contact(x, y, dx, dy, r, travel, targets[j], bounds[j], False)
+        if tt < t:
+            t, nx, ny, svx, svy, element, cut = tt, tnx, tny, 0.0, 0.0, first + j, False
+    return t, nx, ny, svx, svy, element, cut
+
+
+@njit(cache=True)
+def cross_target_lines(state, env, geometry, x, y, vx, vy, used, start):
+    """The spinner and kickback lines of env ``env`` on the ball's move from (x, y) at (vx, vy)
+    for ``used`` seconds, from ``start`` [s into the frame]. A lit kickback's line crossed
+    against its kick ends the move there: it fires (the caller gives the ball its kick) and goes
+    dark. Each spinner crossed is spun (:func:`spin_spinner`); each kickback line
+    crossed against its kick is a hit, lit or not. Returns ``(kicked, used)``: the kickback
+    that fired (-1: none) and the move's time, cut short at its line."""
+    kickbacks, lit = geometry.kickbacks, state.kickback_lit[env]
+    kicked = -1
+    if kickbacks.shape[0] > 0:
+        kicked, u = kickback_crossing(x, y, vx, vy, used, kickbacks, lit)
+        if kicked >= 0:
+            used *= u
+        count_kickbacks(state, env, x, y, vx, vy, used, kickbacks, lit,
+                        first_kickback(geometry), start + used)  # fmt: skip
+    spinners = geometry.spinners
+    for j in range(spinners.shape[0]):
+        u = sensor_crossing(x, y, vx * used, vy * used, spinners[j])
+        if u < INF:
+            spin_spinner(spinners[j], state.spinners[env, j], vx, vy, start + used * u)
+    if kicked >= 0:
+        element = first_kickback(geometry) + kicked
+        state.hits[env, element] += 1
+        log_contact(state, env, element, start + used, 0.0)
+        lit[kicked] = False
+    return kicked, used

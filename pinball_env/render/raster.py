@@ -233,8 +233,7 @@ class Renderer:
         """Frames of a batch of envs: ball centres ``balls`` (N, >= 2) [m], drawn where
         ``visible`` (N,) bool, flippers at ``flipper_angles`` (N, F) [rad]. Returns (N, height,
         width, 3) uint8, or (N, height, width, 1) luma with ``grayscale``, the table's picture at
-        (:attr:`top`, :attr:`left`), written into ``out`` when given; ``threads`` share the
-        envs.
+        (:attr:`top`, :attr:`left`), written into ``out`` when given; ``threads`` share the envs.
 
         The cabinet (a table with the player's plunger; ``game.state`` and the kernel's state
         hold them): ``plunger_pull`` (N,) [m] draws the plunger pulled back by it, ``on_plunger``
@@ -255,19 +254,12 @@ class Renderer:
         shifts = self._shifts(n, cabinet_offset)
         tips, drawn_pull = self._plunger_tips(n, plunger_pull)
         if on_plunger is not None:
-            if drawn_pull is None:
-                raise ValueError("on_plunger needs plunger_pull: the ball waits on the plunger")
-            waiting = np.asarray(on_plunger, dtype=np.bool_).reshape(n)
-            balls = balls.copy()
-            balls[waiting, 1] -= drawn_pull[waiting]
+            balls = _on_plunger(balls, on_plunger, drawn_pull, n)
         if out is None:
             out = np.empty((n, self.height, self.width, channels), dtype=np.uint8)
         fills = (rows, columns) == (self.height, self.width)
         pictures = out if fills else np.empty((n, *static.shape), dtype=np.uint8)
-        if grayscale:
-            colours = (_FLIPPER_LUMA, _BALL_LUMA, _PLUNGER_LUMA, _BACKGROUND_LUMA)
-        else:
-            colours = (rgb(FLIPPER), rgb(BALL), rgb(PLUNGER), rgb(BACKGROUND))
+        colours = _moving_colours(grayscale)
         plunger = np.zeros(4) if self._plunger is None else self._plunger
         args = (
             pictures, static, balls, np.ascontiguousarray(visible, dtype=np.bool_),
@@ -407,3 +399,23 @@ class FrameRenderer(Renderer):
         self.width, self.height = int(width), int(height)  # the images'
         self.top = (self.height - inner_height) // 2
         self.left = (self.width - inner_width) // 2
+
+
+def _on_plunger(
+    balls: np.ndarray, on_plunger: np.ndarray, drawn_pull: np.ndarray | None, n: int
+) -> np.ndarray:
+    """``balls`` (n, >= 2) with those ``on_plunger`` (n,) bool lowered by the plunger's drawn
+    pull (n,) [m], as they wait on it (a copy)."""
+    if drawn_pull is None:
+        raise ValueError("on_plunger needs plunger_pull: the ball waits on the plunger")
+    waiting = np.asarray(on_plunger, dtype=np.bool_).reshape(n)
+    balls = balls.copy()
+    balls[waiting, 1] -= drawn_pull[waiting]
+    return balls
+
+
+def _moving_colours(grayscale: bool) -> tuple:
+    """The colours of the moving parts (flipper, ball, plunger, background), as luma or RGB."""
+    if grayscale:
+        return (_FLIPPER_LUMA, _BALL_LUMA, _PLUNGER_LUMA, _BACKGROUND_LUMA)
+    return (rgb(FLIPPER), rgb(BALL), rgb(PLUNGER), rgb(BACKGROUND))

@@ -3,6 +3,7 @@
 from pinball_env.sim.world import World
 from pinball_env.table import Table
 
+# The physics backends, declared once: the ``physics`` option's choices are these.
 PHYSICS = ("swept", "pymunk")
 
 

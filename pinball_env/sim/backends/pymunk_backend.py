@@ -60,18 +60,16 @@ from pinball_env.physics.columns import (
     PROP_KICK,
     PROP_RESTITUTION,
 )
-from pinball_env.physics.data import first_drop_target, first_kickback
-from pinball_env.physics.step import (
+from pinball_env.physics.data import first_drop_target, first_kickback, log_contact
+from pinball_env.physics.step import flipper_end, flipper_motion, is_hit
+from pinball_env.physics.targets import (
     count_kickbacks,
-    flipper_end,
-    flipper_motion,
-    is_hit,
     kickback_crossing,
-    log_contact,
     record_crossings,
     sensor_crossing,
+    spin_spinner,
+    update_targets,
 )
-from pinball_env.physics.targets import spin_spinner, update_targets
 from pinball_env.sim.world import World
 from pinball_env.table import Table
 

@@ -1,0 +1,102 @@
+"""What the envs report after a step: the per-step infos of a :class:`~pinball_env.game.Game`,
+of every env as arrays (:func:`batch_infos`) or of one env as Python numbers
+(:func:`env_info`)."""
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y, CABINET_X, CABINET_Y
+
+if TYPE_CHECKING:
+    from pinball_env.game.game import Game
+
+
+def element_events(game: "Game", env: int) -> dict[str, int]:
+    """The scoring elements env ``env`` hit in the last step: name -> hits."""
+    hits = game.world.state.hits[env]
+    names = game.world.table_of(env).element_names
+    return {names[i]: int(hits[i]) for i in game.world.tables.scoring[env] if hits[i]}
+
+
+def batch_infos(game: "Game") -> dict[str, np.ndarray]:
+    """The per-step info of every env as arrays (first axis the env): ``ball_position`` [m],
+    ``ball_velocity`` [m/s], ``score``, ``balls_left``, ``points`` (this step), ``drained`` (a
+    ball drained this step) and ``frames`` (played in this game); the cabinet's and the rules'
+    entries on tables with them."""
+    state, balls = game.state, game.world.balls
+    return {
+        "ball_position": balls[:, [BALL_X, BALL_Y]],
+        "ball_velocity": balls[:, [BALL_VX, BALL_VY]],
+        "score": state.score.copy(),
+        "balls_left": state.balls_left.copy(),
+        "points": state.points.copy(),
+        "drained": state.drained.copy(),
+        "frames": state.frames.copy(),
+        **_cabinet_infos(game, slice(None)),
+        **_rule_infos(game, slice(None)),
+    }
+
+
+def env_info(game: "Game", env: int) -> dict[str, Any]:
+    """The per-step info of env ``env``: that of :func:`batch_infos` as Python numbers (the
+    ball's position and velocity as float64 arrays), plus ``events`` (:func:`element_events`)."""
+    state, ball = game.state, game.world.balls[env]
+    return {
+        "ball_position": ball[[BALL_X, BALL_Y]],
+        "ball_velocity": ball[[BALL_VX, BALL_VY]],
+        "score": int(state.score[env]),
+        "balls_left": int(state.balls_left[env]),
+        "events": element_events(game, env),
+        "points": int(state.points[env]),
+        "drained": bool(state.drained[env]),
+        "frames": int(state.frames[env]),
+        **{
+            key: value if isinstance(value, np.ndarray) else value.item()
+            for key, value in _cabinet_infos(game, env).items()
+        },
+        **_rule_info(game, env),
+    }
+
+
+def _rule_infos(game: "Game", envs: int | slice) -> dict[str, Any]:
+    """The rules' entries of the infos (none for a table without rules or ball save):
+    ``rule_events`` (the step's rules fired, ball saves and bonuses, counts in the order of
+    ``game.event_names``), ``bonus``, ``bonus_multiplier`` and ``rule_score`` (points the rules
+    scored in this game: modes, awards and end-of-ball bonuses)."""
+    if not game.book.active:
+        return {}
+    state = game.state
+    return {
+        "rule_events": state.rule_events[envs].copy(),
+        "bonus": state.bonus[envs].copy(),
+        "bonus_multiplier": state.multiplier[envs].copy(),
+        "rule_score": state.rule_points[envs].copy(),
+    }
+
+
+def _rule_info(game: "Game", env: int) -> dict[str, Any]:
+    """:func:`_rule_infos` of one env, ``rule_events`` as name -> times this step."""
+    info = {key: value.item() for key, value in _rule_infos(game, env).items()
+            if key != "rule_events"}  # fmt: skip
+    if info:
+        counts = game.state.rule_events[env]
+        info["rule_events"] = {
+            name: int(n) for name, n in zip(game.event_names, counts, strict=False) if n
+        }
+    return info
+
+
+def _cabinet_infos(game: "Game", envs: int | slice) -> dict[str, Any]:
+    """The cabinet's entries of the infos (none for a table without a cabinet)."""
+    if not game.cabinet:
+        return {}
+    state, world, progress = game.state, game.world.state, game.progress
+    return {
+        "tilt_warnings": state.tilt_warnings[envs].copy(),
+        "tilted": world.tilted[envs] | progress.tilt[envs],
+        "ball_on_plunger": state.on_plunger[envs].copy(),
+        "plunger_pull": state.plunger_pull[envs].copy(),
+        "cabinet_offset": world.cabinet[envs, CABINET_X : CABINET_Y + 1].copy(),
+        "skill_shot": progress.skill_shot[envs].copy(),
+    }

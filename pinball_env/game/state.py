@@ -1,0 +1,144 @@
+"""The game's state: everything that changes during play, for every env, in one record.
+
+:class:`GameState` is to the game what ``physics.State`` is to the kernel (and holds it, as
+``world``): :func:`make_game_state` allocates it once, :func:`clear_game` starts an env's game
+over in it, and :func:`copy_state` / :func:`copy_state_into` snapshot and restore it as one
+object. What does not change during play (every env's table) is the World's ``tables`` record.
+"""
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from pinball_env.game.actions import CABINET_BUTTONS
+from pinball_env.game.rulebook import RuleBook
+from pinball_env.physics import State
+from pinball_env.table.rules import RuleSet
+
+
+class GameState(NamedTuple):
+    """Everything that changes during play, for every env (the first axis)."""
+
+    world: State  # the kernel's arrays: balls, flippers, contacts, hits
+    balls_left: np.ndarray  # (N,) int64: balls still to play, the one in play included
+    score: np.ndarray  # (N,) int64: points scored in the current game
+    drain_height: np.ndarray  # (N,) float64: where the last drained ball crossed the drain [m]
+    points: np.ndarray  # (N,) int64: points of the last step
+    drained: np.ndarray  # (N,) bool: a ball drained in the last step
+    anchor: np.ndarray  # (N, 2) float64: where the ball was when it last moved a radius [m]
+    still_frames: np.ndarray  # (N,) int64: frames since then (see BALL_SEARCH_TIME)
+    frames: np.ndarray  # (N,) int64: frames played in the current game
+    # The cabinet (tables with one): the tilt itself is the kernel's (world.tilted).
+    plunger_pull: np.ndarray  # (N,) float64: how far the plunger is pulled back [m]
+    on_plunger: np.ndarray  # (N,) bool: the ball in play waits on the plunger
+    nudge_wait: np.ndarray  # (N,) int64: frames until the next nudge can shove the cabinet
+    tilt_warnings: np.ndarray  # (N,) int64: warnings standing
+    warning_age: np.ndarray  # (N,) int64: frames since the last warning
+    skill_left: np.ndarray  # (N,) int64: frames the skill shot stays lit (0: dark)
+    lane_frames: np.ndarray  # (N,) int64: frames the ball has stayed in the shooter lane
+    # The rules (tables with them, see ``game.rulebook``; the targets' state is the kernel's).
+    lights: np.ndarray  # (N, L) bool
+    counters: np.ndarray  # (N, C) int64
+    timers: np.ndarray  # (N, Tm) int64: frames each timer still runs (0: stopped)
+    bonus: np.ndarray  # (N,) int64: the end-of-ball bonus so far [points]
+    multiplier: np.ndarray  # (N,) int64: the bonus multiplier (1 to max_multiplier)
+    save_frames: np.ndarray  # (N,) int64: frames the ball save lasts (-1: from the launch, 0: off)
+    rule_points: np.ndarray  # (N,) int64: points the rules scored in this game
+    rule_events: np.ndarray  # (N, R + 2) int64: rules fired in the last step (RuleSet.event_names)
+    lights_were_on: np.ndarray  # (N, R) bool: a lights_on rule's lights were all lit
+    flippers_before: np.ndarray  # (N, F) bool: the flipper commands of the last frame
+    # The flipper commands and cabinet buttons the last frame pressed (with sticky actions,
+    # repeat_action_probability, the next frame may press them again).
+    pressed: np.ndarray  # (N, F + 4) bool
+
+
+def make_game_state(world: State, book: RuleBook, rule_set: RuleSet, n_flippers: int) -> GameState:
+    """A :class:`GameState` around the kernel's ``world`` arrays (as many envs), every game at
+    its start but for the balls (none left: :func:`clear_game` deals them).
+
+    Args:
+        world: the kernel's state of every env (the World's ``state``).
+        book: the table's rules compiled (``game.rulebook``): its rules and timers.
+        rule_set: the table's rules as data (an empty ``RuleSet`` without): its lights, counters.
+        n_flippers: the table's flippers.
+    """
+    n_envs = len(world.active)
+    n_rules = len(book.trigger_kind)
+
+    def zeros(*shape: int, dtype: type = np.int64) -> np.ndarray:
+        return np.zeros((n_envs, *shape), dtype=dtype)
+
+    return GameState(
+        world=world,
+        balls_left=zeros(),
+        score=zeros(),
+        drain_height=zeros(dtype=np.float64),
+        points=zeros(),
+        drained=zeros(dtype=bool),
+        anchor=zeros(2, dtype=np.float64),
+        still_frames=zeros(),
+        frames=zeros(),
+        plunger_pull=zeros(dtype=np.float64),
+        on_plunger=zeros(dtype=bool),
+        nudge_wait=zeros(),
+        tilt_warnings=zeros(),
+        warning_age=zeros(),
+        skill_left=zeros(),
+        lane_frames=zeros(),
+        lights=zeros(len(rule_set.lights), dtype=bool),
+        counters=zeros(len(rule_set.counters)),
+        timers=zeros(len(book.timer_frames)),
+        bonus=zeros(),
+        multiplier=np.ones(n_envs, dtype=np.int64),
+        save_frames=zeros(),
+        rule_points=zeros(),
+        rule_events=zeros(n_rules + 2),
+        lights_were_on=zeros(n_rules, dtype=bool),
+        flippers_before=zeros(n_flippers, dtype=bool),
+        pressed=zeros(world.flipper_command.shape[1] + len(CABINET_BUTTONS), dtype=bool),
+    )
+
+
+def clear_game(
+    state: GameState, env: int, balls: int, lights: list[bool] | None, cabinet: bool
+) -> None:
+    """Start env ``env``'s game over in ``state``: ``balls`` to play, no score, no events of the
+    last game; the rules' state (where ``lights``, the lights lit at the start, is given: a
+    table with rules or ball save) and the cabinet's (where ``cabinet``) at their start. The
+    ball and the flippers are the World's to place."""
+    state.world.hits[env] = 0  # the reset's info shows no events of the last game
+    state.world.contact_count[env] = 0
+    state.balls_left[env] = balls
+    state.score[env] = 0
+    state.points[env] = 0
+    state.drained[env] = False
+    state.frames[env] = 0
+    state.pressed[env] = False
+    if lights is not None:
+        state.lights[env] = lights
+        for array in (state.counters, state.timers, state.bonus, state.rule_points,
+                      state.rule_events, state.lights_were_on):  # fmt: skip
+            array[env] = 0
+        state.multiplier[env] = 1
+        state.save_frames[env] = -1
+        state.flippers_before[env] = False
+    if cabinet:
+        state.world.cabinet[env] = 0.0
+        state.world.tilted[env] = False
+        for array in (state.nudge_wait, state.tilt_warnings, state.warning_age,
+                      state.skill_left, state.lane_frames):  # fmt: skip
+            array[env] = 0
+
+
+def copy_state(record: tuple) -> Any:
+    """A deep copy of a record of arrays (and nested records)."""
+    return type(record)(*(copy_state(v) if isinstance(v, tuple) else v.copy() for v in record))
+
+
+def copy_state_into(source: tuple, target: tuple) -> None:
+    """Copy every array of record ``source`` into the same array of record ``target``."""
+    for src, dst in zip(source, target, strict=True):
+        if isinstance(dst, tuple):
+            copy_state_into(src, dst)
+        else:
+            np.copyto(dst, src)
