@@ -1,13 +1,18 @@
 """Pinball tables as validated data.
 
 - ``model.py``: the table model (frozen dataclasses) and ``Table.pack()``, the kernel's arrays;
-- ``schema.py``: the validation schema, ``table_from_dict`` and ``table_to_dict``;
+- ``rules.py``: the rules as data (``RuleSet``: lights, counters, timers, triggers, effects);
+- ``schema.py``: ``table_from_dict``, the table schema's top level, over its parts:
+  ``fields.py`` (the kinds of value and ``TableError``), ``elements.py``, ``cabinet.py``,
+  ``rules_schema.py`` (the ``rules`` section) and ``geometry.py`` (the checks that tie places
+  together, ``check_ball_state``); ``serialise.py``: ``table_to_dict``;
 - ``files.py``: YAML loading and dumping, the built-in tables (``tables/*.yaml``, package
   data), and tables by name (``load_any_table``; generators such as ``pinball_env.procgen``
   register their names' prefixes with ``register_generator``);
 - ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
 """
 
+from pinball_env.table.fields import MAX_BALL_SPEED, TableError
 from pinball_env.table.files import (
     TABLES_DIR,
     TEST_TABLES,
@@ -19,6 +24,7 @@ from pinball_env.table.files import (
     load_table,
     register_generator,
 )
+from pinball_env.table.geometry import check_ball_state
 from pinball_env.table.model import (
     BUTTONS,
     Ball,
@@ -35,13 +41,8 @@ from pinball_env.table.model import (
     Wall,
     enclosure,
 )
-from pinball_env.table.schema import (
-    MAX_BALL_SPEED,
-    TableError,
-    check_ball_state,
-    table_from_dict,
-    table_to_dict,
-)
+from pinball_env.table.schema import table_from_dict
+from pinball_env.table.serialise import table_to_dict
 
 __all__ = [
     "BUTTONS",

@@ -21,8 +21,10 @@ from typing import Any
 
 import yaml
 
+from pinball_env.table.fields import TableError
 from pinball_env.table.model import Table
-from pinball_env.table.schema import TableError, table_from_dict, table_to_dict
+from pinball_env.table.schema import table_from_dict
+from pinball_env.table.serialise import table_to_dict
 
 SUFFIXES = (".yaml", ".yml")
 # Largest table file read [bytes]: the classic table is 8 KB.
