@@ -19,6 +19,8 @@ MAX_RATE_PER_SUBSTEP = 0.5  # most of sqrt(k/M), c/M, sqrt(g/L), bob damping tim
 
 
 def parse_cabinet(value: object, loc: Where, substep: float) -> Cabinet:
+    """The ``cabinet`` section: a shove no faster than MAX_SHOVE_SPEED, rates stable over a
+    ``substep`` [s]."""
     parsers = {
         "mass": partial(number, low=10.0, high=1000.0),  # [kg]
         "stiffness": partial(number, low=1.0, high=1e7),  # [N/m]
@@ -40,6 +42,7 @@ def parse_cabinet(value: object, loc: Where, substep: float) -> Cabinet:
 
 
 def parse_tilt(value: object, loc: Where, substep: float, gravity: float) -> Tilt:
+    """The ``tilt`` section: the bob's rates stable over a ``substep`` [s] under ``gravity``."""
     parsers = {
         "bob_length": partial(number, low=0.02, high=1.0),  # [m]: VPX's bob is 0.1 m
         "bob_damping": partial(number, low=0.0, high=100.0),  # [1/s]

@@ -118,6 +118,7 @@ def _group(
 
 
 def parse_materials(value: object, loc: Where) -> tuple[Material, ...]:
+    """The ``materials`` mapping (name -> restitution, friction), at least one."""
     if not isinstance(value, Mapping) or not value:
         loc.fail(f"expected a mapping of at least one material, got {describe(value)}")
     if len(value) > MAX_POSTS:
@@ -198,6 +199,8 @@ def _sensor(value: object, loc: Where, point: Parser) -> Sensor:
 
 
 def parse_plunger(value: object, loc: Where, point: Parser) -> Plunger:
+    """The ``plunger``: a machine's (a launch speed range) or the player's (stroke, pull_time
+    and pull_speed together, and then a scatter and a skill shot if any)."""
     speed = partial(pair, item=partial(number, low=0.0, high=20.0, open_low=True))
     parsers = {
         "position": point,

@@ -2,6 +2,9 @@
 table file holds (mappings with known keys, lists, names, flags, numbers in a range, pairs,
 points in the playfield), each with the one error format of a table.
 
+The kinds themselves (:func:`is_int`, :func:`is_real`, :func:`is_flag`, :func:`is_finite`) are
+pinball_env's one vocabulary: :mod:`pinball_env.checks` phrases the options' errors over them.
+
 Every parser takes the value and its :class:`Where` and returns the parsed value, or raises
 :class:`TableError` naming the source, the path of the element and the problem. Values from a
 file are shown shortened (:func:`short`): aliases in YAML can make a small file hold a value whose
@@ -36,6 +39,29 @@ _SHORT.maxlong = 40
 
 class TableError(ValueError):
     """A table description is invalid or cannot be read."""
+
+
+def is_int(value: object) -> bool:
+    """An integer (Python's or NumPy's), not a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+
+
+def is_real(value: object) -> bool:
+    """A real number (an int or a float, Python's or NumPy's), not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def is_flag(value: object) -> bool:
+    """True or False (Python's or NumPy's bool)."""
+    return isinstance(value, (bool, np.bool_))
+
+
+def is_finite(value: object) -> bool:
+    """A real number that is finite as a float (an int too large for a float is not)."""
+    try:
+        return is_real(value) and math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def short(value: object) -> str:
@@ -124,7 +150,7 @@ def choice(value: object, loc: Where, options: tuple[str, ...]) -> str:
 
 def flag(value: object, loc: Where) -> bool:
     """True or false (Python's or NumPy's bool), as a bool."""
-    if not isinstance(value, (bool, np.bool_)):
+    if not is_flag(value):
         loc.fail(f"expected true or false, got {describe(value)}")
     return bool(value)
 
@@ -140,8 +166,7 @@ def number(
     integer: bool = False,
 ) -> float | int:
     """A finite real (or, with ``integer``, an int) in the given interval."""
-    kind = numbers.Integral if integer else numbers.Real
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, kind):
+    if not (is_int(value) if integer else is_real(value)):
         hint = ""
         if isinstance(value, str) and _parses_as_float(value):
             hint = " (YAML reads exponents without a dot as text: write 1.0e-6, not 1e-6)"
