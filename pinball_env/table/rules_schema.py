@@ -65,32 +65,7 @@ def parse_rules(
     """The ``rules`` section; ``names`` lists the table's names of each kind (elements, banks,
     kickbacks) that rules may refer to."""
     raw = mapping(value, loc, [], ["lights", "counters", "timers", "max_multiplier", "rules"])
-    light_parsers = {"name": string, "at": point, "lit": flag}
-    lights = tuple(
-        record(Light, item, loc.key("lights").index(i, name_of(item)), light_parsers)
-        for i, item in enumerate(list_of(raw.get("lights", []), loc.key("lights"), 0, MAX_RULES))
-    )
-    counters = tuple(
-        string(item, loc.key("counters").index(i))
-        for i, item in enumerate(
-            list_of(raw.get("counters", []), loc.key("counters"), 0, MAX_RULES)
-        )
-    )
-    timer_parsers = {
-        "name": string,
-        "time": partial(number, low=0.0, high=600.0, open_low=True),  # [s]
-        "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
-        "elements": partial(_names, known=names["elements"], what="element", min_len=0),
-    }
-    timers = tuple(
-        record(Timer, item, loc.key("timers").index(i, name_of(item)), timer_parsers)
-        for i, item in enumerate(list_of(raw.get("timers", []), loc.key("timers"), 0, MAX_RULES))
-    )
-    for key, items in (("lights", [x.name for x in lights]), ("counters", list(counters)),
-                       ("timers", [x.name for x in timers])):  # fmt: skip
-        if len(set(items)) != len(items):
-            duplicate = next(name for name in items if items.count(name) > 1)
-            loc.key(key).fail(f"{short(duplicate)} is named twice")
+    lights, counters, timers = _declarations(raw, loc, point, names["elements"])
     known = {
         **names,
         "lights": tuple(x.name for x in lights),
@@ -104,18 +79,58 @@ def parse_rules(
     rules = tuple(
         _rule(item, loc.key("rules").index(i, name_of(item)), known) for i, item in enumerate(items)
     )
-    rule_names = [rule.name for rule in rules]
-    if len(set(rule_names)) != len(rule_names):
-        duplicate = next(name for name in rule_names if rule_names.count(name) > 1)
+    named = [rule.name for rule in rules]
+    if len(set(named)) != len(named):
+        duplicate = next(name for name in named if named.count(name) > 1)
         loc.key("rules").fail(f"two rules are named {short(duplicate)}")
     rule_set = RuleSet(lights, counters, timers, max_multiplier, rules)
+    _check_no_ring(rule_set, loc.key("rules"))
+    return rule_set
+
+
+def _declarations(
+    raw: Mapping[str, Any], loc: Where, point: Parser, elements: tuple[str, ...]
+) -> tuple[tuple[Light, ...], tuple[str, ...], tuple[Timer, ...]]:
+    """The lights, counters and timers that the rules name, each name given once; a timer's
+    ``elements`` are among the table's ``elements``."""
+
+    def listed(key: str) -> list[Any]:
+        return list_of(raw.get(key, []), loc.key(key), 0, MAX_RULES)
+
+    light_parsers = {"name": string, "at": point, "lit": flag}
+    lights = tuple(
+        record(Light, item, loc.key("lights").index(i, name_of(item)), light_parsers)
+        for i, item in enumerate(listed("lights"))
+    )
+    counters = tuple(
+        string(item, loc.key("counters").index(i)) for i, item in enumerate(listed("counters"))
+    )
+    timer_parsers = {
+        "name": string,
+        "time": partial(number, low=0.0, high=600.0, open_low=True),  # [s]
+        "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
+        "elements": partial(_names, known=elements, what="element", min_len=0),
+    }
+    timers = tuple(
+        record(Timer, item, loc.key("timers").index(i, name_of(item)), timer_parsers)
+        for i, item in enumerate(listed("timers"))
+    )
+    for key, items in (("lights", [x.name for x in lights]), ("counters", list(counters)),
+                       ("timers", [x.name for x in timers])):  # fmt: skip
+        if len(set(items)) != len(items):
+            duplicate = next(name for name in items if items.count(name) > 1)
+            loc.key(key).fail(f"{short(duplicate)} is named twice")
+    return lights, counters, timers
+
+
+def _check_no_ring(rule_set: RuleSet, loc: Where) -> None:
+    """No rules trigger one another in a ring (they could fire for ever in one frame)."""
     cycle = find_cycle(rule_set)
     if cycle:
-        ring = " -> ".join(repr(rules[i].name) for i in cycle)
-        loc.key("rules").fail(
+        ring = " -> ".join(repr(rule_set.rules[i].name) for i in cycle)
+        loc.fail(
             f"rules {ring} trigger one another in a ring: they could fire for ever in one frame"
         )
-    return rule_set
 
 
 def _rule(value: object, loc: Where, known: Mapping[str, tuple[str, ...]]) -> Rule:
