@@ -69,6 +69,11 @@ def short(value: object) -> str:
     return _SHORT.repr(value)
 
 
+def clipped(text: str, most: int = 300) -> str:
+    """``text`` cut after ``most`` characters (an OS's or YAML's message, a path)."""
+    return text if len(text) <= most else text[:most] + " ..."
+
+
 @dataclass(frozen=True)
 class Where:
     """Where a value sits: the source file and the element path, for error messages."""
