@@ -1,28 +1,41 @@
-"""The checks of option values, written once: each raises a ValueError that names the option,
-says what it takes and shows what it got."""
+"""The checks of option values, written once: each raises a ValueError in the one format of an
+option's error, ``NAME must be WHAT, got VALUE`` (:func:`must_be`).
 
-import math
-import numbers
+What counts as an integer, a real number, a flag or a finite number is the table's
+(:mod:`pinball_env.table.fields`): an option and a table field take the same values. The table
+phrases its own errors with the file and the element's path (``TableError``); a config names the
+file and the key in ``NAME`` (``"run.yaml: env.num_envs:"``).
+"""
+
 from collections.abc import Sequence
+from typing import NoReturn
 
-import numpy as np
+from pinball_env.table.fields import is_finite, is_flag, is_int, is_real
+
+__all__ = [
+    "choice",
+    "finite",
+    "flag",
+    "fraction",
+    "integer",
+    "is_finite",
+    "is_flag",
+    "is_int",
+    "is_real",
+    "must_be",
+    "optional_integer",
+]
 
 
-def is_int(value: object) -> bool:
-    """An integer (Python's or NumPy's), not a bool."""
-    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
-
-
-def is_real(value: object) -> bool:
-    """A real number (an int or a float, Python's or NumPy's), not a bool."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+def must_be(name: str, what: str, value: object) -> NoReturn:
+    """Raise the ValueError ``NAME must be WHAT, got VALUE``."""
+    raise ValueError(f"{name} must be {what}, got {value!r}")
 
 
 def integer(name: str, value: object, low: int | None = None, high: int | None = None) -> int:
     """``value`` as an int, if it is an integer in [low, high] (either bound may be None)."""
-    below = low is not None and value < low
-    if not is_int(value) or below or (high is not None and value > high):
-        raise ValueError(f"{name} must be an integer {_range(low, high)}, got {value!r}")
+    if not is_int(value) or not _within(value, low, high):
+        must_be(name, f"an integer {_range(low, high)}".rstrip(), value)
     return int(value)
 
 
@@ -30,36 +43,40 @@ def optional_integer(name: str, value: object, low: int | None = None) -> int | 
     """None, or an integer >= ``low``."""
     if value is None:
         return None
-    if not is_int(value) or (low is not None and value < low):
-        raise ValueError(f"{name} must be None or an integer {_range(low, None)}, got {value!r}")
+    if not is_int(value) or not _within(value, low, None):
+        must_be(name, f"None or an integer {_range(low, None)}".rstrip(), value)
     return int(value)
 
 
 def finite(name: str, value: object) -> float:
     """``value`` as a float, if it is a finite real number."""
-    if not is_real(value) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if not is_finite(value):
+        must_be(name, "a finite number", value)
     return float(value)
 
 
 def fraction(name: str, value: object) -> float:
     """``value`` as a float, if it is a number in [0, 1)."""
     if not is_real(value) or not 0.0 <= value < 1.0:
-        raise ValueError(f"{name} must be a number in [0, 1), got {value!r}")
+        must_be(name, "a number in [0, 1)", value)
     return float(value)
 
 
 def flag(name: str, value: object) -> bool:
     """``value`` as a bool, if it is True or False (Python's or NumPy's)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be True or False, got {value!r}")
+    if not is_flag(value):
+        must_be(name, "True or False", value)
     return bool(value)
 
 
 def choice(name: str, value: object, choices: Sequence[object]) -> None:
     """Nothing, if ``value`` is one of ``choices``."""
     if value not in choices:
-        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
+        must_be(name, f"one of {', '.join(map(repr, choices))}", value)
+
+
+def _within(value: int, low: int | None, high: int | None) -> bool:
+    return (low is None or value >= low) and (high is None or value <= high)
 
 
 def _range(low: int | None, high: int | None) -> str:

@@ -34,7 +34,7 @@ GENERATED = "generated"
 OBS_TYPES = ("state", "rgb", "grayscale")
 ACTION_TYPES = ("discrete", "multibinary")
 RENDER_MODES = ("human", "rgb_array")
-from pinball_env.procgen import DIFFICULTIES  # noqa: E402
+from pinball_env.procgen import DIFFICULTIES, check_difficulty, layout_seeds  # noqa: E402
 
 # The options that only the generated-table source takes.
 LAYOUT_OPTIONS = ("num_layouts", "start_layout", "difficulty", "targets")
@@ -170,7 +170,7 @@ class PinballOptions(_Checked):
     (0: unlimited)."""
     start_layout: int = _option(0, _at_least(0))
     """Generated tables: the first layout's seed."""
-    difficulty: str = _option("easy", _choice(*DIFFICULTIES))
+    difficulty: str = _option("easy", lambda _, value: check_difficulty(value))
     """Generated tables: ``"easy"`` or ``"hard"`` layouts."""
     targets: bool = _option(False, checks.flag)
     """Generated tables get a drop bank and a spinner (PinballProcgen-v0's tables; False keeps
@@ -198,6 +198,8 @@ class PinballOptions(_Checked):
                 )
         elif self.physics != "swept":
             raise ValueError(f"physics={self.physics!r} plays one fixed table, not generated ones")
+        else:
+            layout_seeds(self.num_layouts, self.start_layout)
 
     @property
     def generated(self) -> bool:

@@ -9,6 +9,7 @@ from gymnasium.utils.env_checker import check_env
 
 import pinball_env  # noqa: F401  (registers the envs)
 from pinball_env.envs import PinballEnv, PinballVectorEnv, layout_table
+from pinball_env.options import PinballOptions
 from pinball_env.physics.rays import (
     RAY_RANGE,
     cast_rays,
@@ -206,6 +207,8 @@ def test_bad_procgen_options_are_clear_errors(kwargs, message):
         procgen_env(**kwargs)
     with pytest.raises(ValueError, match=message):
         procgen_vector_env(num_envs=2, **kwargs)
+    with pytest.raises(ValueError, match=message):  # the options alone, before any env is built
+        PinballOptions(table="generated", **kwargs)
 
 
 def test_a_reset_generates_its_tables_together_and_shows_progress(monkeypatch, capsys):

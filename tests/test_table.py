@@ -925,3 +925,29 @@ def test_built_in_tables_live_in_the_package() -> None:
         r"box\)",
     ):
         load_table("nope")
+
+
+@pytest.mark.parametrize(
+    "value", [3, np.int64(3), 2.5, np.float32(0.5), True, np.bool_(False), "3", None, 10**400]
+)
+def test_a_table_field_and_an_option_take_the_same_kinds_of_value(value: object) -> None:
+    """One vocabulary: a table's number fields and the options' checks (pinball_env.checks)
+    accept the same integers, reals and flags, each failing with its own error format."""
+    from pinball_env import checks
+
+    def accepted(parse: Callable[[], object]) -> bool:
+        try:
+            parse()
+        except ValueError:  # TableError is one
+            return False
+        return True
+
+    substeps, mass, closed = box_dict(), box_dict(), box_dict()
+    substeps["simulation"]["substeps"] = value  # an integer in [1, 100]
+    mass["ball"]["mass"] = value  # a number in [0.001, 10]
+    closed["walls"][0]["closed"] = value
+    assert accepted(lambda: table_from_dict(substeps)) == accepted(
+        lambda: checks.integer("substeps", value, 1, 100)
+    )
+    assert accepted(lambda: table_from_dict(mass)) == accepted(lambda: checks.finite("m", value))
+    assert accepted(lambda: table_from_dict(closed)) == accepted(lambda: checks.flag("c", value))

@@ -17,12 +17,10 @@ from typing import Any
 import numpy as np
 
 from pinball_env import checks
-from pinball_env.procgen import DIFFICULTIES, MAX_SEED, RANGES, generate_table
+from pinball_env.procgen import DIFFICULTIES, MAX_SEED, RANGES, UNLIMITED_LAYOUTS, generate_table
 from pinball_env.render import PIXELS_PER_METRE
 from pinball_env.table import Table
 
-# Seeds an unlimited env (num_layouts=0) draws from: [start_layout, start_layout + this).
-UNLIMITED_LAYOUTS = 2**31
 # Generated tables kept in memory (a table is about 50 KB; generating one takes 0.6-1 s on 2
 # shared cores).
 CACHED_TABLES = 512

@@ -26,6 +26,7 @@ from pinball_env.procgen.names import (
 from pinball_env.procgen.playability import playability
 from pinball_env.procgen.ranges import RANGES
 from pinball_env.table import Table, TableError, table_from_dict
+from pinball_env.table.fields import is_flag, is_int
 
 # Draws tried before giving up on a seed (none has needed more than a handful).
 MAX_DRAWS = 100
@@ -52,10 +53,10 @@ def generate_table(seed: int, difficulty: str = "easy", targets: bool = False) -
 def generate(seed: int, difficulty: str = "easy", targets: bool = False) -> Generated:
     """:func:`generate_table`, with the number of draws it took and the rejections."""
     check_difficulty(difficulty)
-    if not isinstance(targets, (bool, np.bool_)):
+    if not is_flag(targets):
         raise TypeError(f"targets must be True or False, got {targets!r}")
     targets = bool(targets)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+    if not is_int(seed):
         raise TypeError(f"seed must be an integer, got {type(seed).__name__}")
     if not 0 <= seed <= MAX_SEED:
         raise ValueError(f"seed must be from 0 to {MAX_SEED}, got {seed}")

@@ -15,13 +15,26 @@ PREFIXES = {"easy": "procgen", "hard": "procgen-hard"}
 TARGETS_SUFFIX = "+targets"
 NAME_PATTERN = re.compile(r"(procgen|procgen-hard)(\+targets)?:(.*)")
 MAX_SEED = 2**63 - 1
+# Seeds an unlimited set of layouts (``num_layouts=0``) draws from: [start, start + this).
+UNLIMITED_LAYOUTS = 2**31
 
 
 def check_difficulty(difficulty: str) -> str:
     """``difficulty``, if it is one of :data:`DIFFICULTIES` (a ``ValueError`` if not)."""
     if difficulty not in DIFFICULTIES:
-        raise ValueError(f"difficulty must be one of {DIFFICULTIES}, got {difficulty!r}")
+        allowed = ", ".join(map(repr, DIFFICULTIES))
+        raise ValueError(f"difficulty must be one of {allowed}, got {difficulty!r}")
     return difficulty
+
+
+def layout_seeds(count: int, start: int) -> range:
+    """The seeds of the layouts ``[start, start + count)`` (``count`` 0: unlimited, that is
+    :data:`UNLIMITED_LAYOUTS` of them), if they are seeds (a ``ValueError`` if not); ``count``
+    and ``start`` are integers >= 0 (the options ``num_layouts`` and ``start_layout``)."""
+    seeds = range(start, start + (count or UNLIMITED_LAYOUTS))
+    if seeds[-1] > MAX_SEED:
+        raise ValueError(f"layouts beyond seed {MAX_SEED}: lower start_layout")
+    return seeds
 
 
 def name_prefix(difficulty: str = "easy", targets: bool = False) -> str:

@@ -1,24 +1,21 @@
 """Pinball tables as validated data.
 
 - ``model.py``: the table model (frozen dataclasses) and ``Table.pack()``, the kernel's arrays;
-- ``schema.py``: the validation schema, ``table_from_dict`` and ``table_to_dict``;
-- ``files.py``: YAML loading and dumping, the built-in tables (``tables/*.yaml``, package
-  data), and tables by name (``load_any_table``; generators such as ``pinball_env.procgen``
-  register their names' prefixes with ``register_generator``);
+- ``rules.py``: the rules as data (``RuleSet``: lights, counters, timers, triggers, effects);
+- ``schema.py``: ``table_from_dict``, the table schema's top level, over its parts:
+  ``fields.py`` (the kinds of value and ``TableError``), ``elements.py``, ``cabinet.py``,
+  ``rules_schema.py`` (the ``rules`` section) and ``geometry.py`` (the checks that tie places
+  together, ``check_ball_state``); ``serialise.py``: ``table_to_dict``;
+- ``files.py``: a table read from a YAML file and written to one (``dump_table``);
+- ``names.py``: tables by name: the built-in tables (``tables/*.yaml``, package data), files
+  (``load_table``) and generated tables (``load_any_table``; generators such as
+  ``pinball_env.procgen`` register their names' prefixes with ``register_generator``);
 - ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
 """
 
-from pinball_env.table.files import (
-    TABLES_DIR,
-    TEST_TABLES,
-    available_tables,
-    builtin_tables_dir,
-    dump_table,
-    generated_prefixes,
-    load_any_table,
-    load_table,
-    register_generator,
-)
+from pinball_env.table.fields import MAX_BALL_SPEED, TableError
+from pinball_env.table.files import dump_table
+from pinball_env.table.geometry import check_ball_state
 from pinball_env.table.model import (
     BUTTONS,
     Ball,
@@ -35,13 +32,18 @@ from pinball_env.table.model import (
     Wall,
     enclosure,
 )
-from pinball_env.table.schema import (
-    MAX_BALL_SPEED,
-    TableError,
-    check_ball_state,
-    table_from_dict,
-    table_to_dict,
+from pinball_env.table.names import (
+    TABLES_DIR,
+    TEST_TABLES,
+    available_tables,
+    builtin_tables_dir,
+    generated_prefixes,
+    load_any_table,
+    load_table,
+    register_generator,
 )
+from pinball_env.table.schema import table_from_dict
+from pinball_env.table.serialise import table_to_dict
 
 __all__ = [
     "BUTTONS",

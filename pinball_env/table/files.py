@@ -1,41 +1,24 @@
-"""Table files: YAML in, YAML out, the built-in tables shipped with the package, and tables
-by name, generated ones included.
-
-The built-in tables are package data in ``pinball_env/table/tables/`` (``classic.yaml``, the
-default, and ``box.yaml``), found through :mod:`importlib.resources` so that they work from a
-wheel as well as from a checkout. Generated tables are named ``PREFIX:...``; the package that
-makes them registers a function per prefix (:func:`register_generator`: ``pinball_env.procgen``
-registers ``procgen`` and ``procgen-hard``, each also with ``+targets``, when imported, as
-importing ``pinball_env`` does), so that :func:`load_any_table` takes their names while this
-package imports no generator.
+"""Table files: a table read from a YAML file (strictly: a key repeated in a mapping is an
+error, and the file's size is bounded) and written to one. Tables by name (the built-in ones,
+files, the generated ones) are in :mod:`~pinball_env.table.names`.
 """
 
 from __future__ import annotations
 
 import os
-import re
-from collections.abc import Callable
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from pinball_env.table.fields import TableError, clipped
 from pinball_env.table.model import Table
-from pinball_env.table.schema import TableError, table_from_dict, table_to_dict
+from pinball_env.table.schema import table_from_dict
+from pinball_env.table.serialise import table_to_dict
 
 SUFFIXES = (".yaml", ".yml")
 # Largest table file read [bytes]: the classic table is 8 KB.
 MAX_TABLE_BYTES = 1 << 20
-
-
-def builtin_tables_dir() -> Path:
-    """The folder of the built-in table files (inside the installed package)."""
-    return Path(str(resources.files("pinball_env.table") / "tables"))
-
-
-# The folder of the built-in tables, as a constant for scripts (``TABLES_DIR / "classic.yaml"``).
-TABLES_DIR = builtin_tables_dir()
 
 
 class _StrictLoader(yaml.SafeLoader):
@@ -54,49 +37,10 @@ class _StrictLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-# Built-in tables that are physics test rigs, not games: they load, but have no plunger,
-# flippers or drain, so no env plays them.
-TEST_TABLES = ("box",)
-TABLE_KINDS = ("game", "test", "all")
-
-
-def available_tables(kind: str = "game") -> list[str]:
-    """Names of the built-in tables: those a game is played on (``"game"``, the default), the
-    physics test rigs (``"test"``: :data:`TEST_TABLES`), or ``"all"``."""
-    if kind not in TABLE_KINDS:
-        raise ValueError(f"kind must be one of {', '.join(TABLE_KINDS)}, got {kind!r}")
-    folder = builtin_tables_dir()
-    names = (
-        sorted(p.stem for p in folder.iterdir() if p.suffix in SUFFIXES) if folder.is_dir() else []
-    )
-    if kind == "all":
-        return names
-    return [name for name in names if (name in TEST_TABLES) == (kind == "test")]
-
-
-def load_table(name_or_path: str | os.PathLike[str]) -> Table:
-    """Load a table from a .yaml/.yml path, or a built-in one by bare name (``"classic"``).
-    (:func:`load_any_table` also takes generated tables' names.)"""
-    if not isinstance(name_or_path, (str, os.PathLike)):
-        raise TypeError(f"a table is a name or a path, got {type(name_or_path).__name__}")
-    path = Path(name_or_path)
-    shown = _shorten(str(name_or_path), 120)
-    try:
-        if path.suffix not in SUFFIXES and len(path.parts) == 1:
-            candidates = [builtin_tables_dir() / f"{path.name}{suffix}" for suffix in SUFFIXES]
-            path = next((p for p in candidates if p.is_file()), None)
-            if path is None:
-                available = ", ".join(available_tables()) or "none"
-                rigs = ", ".join(available_tables("test"))
-                raise TableError(
-                    f"unknown table {shown!r} (available: {available}; test rigs: {rigs})"
-                )
-        found = path.is_file()
-    except OSError as exc:  # a name too long for the file system, say
-        raise TableError(f"{shown}: cannot read the file: {_shorten(str(exc), 120)}") from None
+def read_table(path: Path) -> Table:
+    """The table in the YAML file at ``path`` (an existing file), validated; every problem a
+    :class:`TableError` that names the file."""
     source = str(path)
-    if not found:
-        raise TableError(f"{_shorten(source, 120)}: table file not found")
     try:
         size = path.stat().st_size
         if size > MAX_TABLE_BYTES:
@@ -105,9 +49,9 @@ def load_table(name_or_path: str | os.PathLike[str]) -> Table:
             )
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=_StrictLoader)
     except yaml.YAMLError as exc:
-        raise TableError(f"{source}: invalid YAML: {_shorten(str(exc))}") from exc
+        raise TableError(f"{source}: invalid YAML: {clipped(str(exc))}") from exc
     except (OSError, UnicodeDecodeError) as exc:
-        raise TableError(f"{source}: cannot read the file: {_shorten(str(exc))}") from exc
+        raise TableError(f"{source}: cannot read the file: {clipped(str(exc))}") from exc
     except RecursionError:
         raise TableError(f"{source}: invalid YAML: nested too deeply") from None
     try:
@@ -116,54 +60,11 @@ def load_table(name_or_path: str | os.PathLike[str]) -> Table:
         raise TableError(f"{source}: a value is nested too deeply") from None
 
 
-def _shorten(text: str, most: int = 300) -> str:
-    return text if len(text) <= most else text[:most] + " ..."
-
-
 def dump_table(table: Table, path: str | os.PathLike[str]) -> Path:
-    """Write ``table`` as a YAML file that :func:`load_table` reads back as the same table."""
+    """Write ``table`` as a YAML file that :func:`~pinball_env.table.names.load_table` reads
+    back as the same table."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     text = yaml.safe_dump(table_to_dict(table), sort_keys=False, default_flow_style=None)
     path.write_text(text, encoding="utf-8")
     return path
-
-
-# A generated table's name: a prefix, a colon, and what the prefix's generator reads.
-GENERATED_NAME = re.compile(r"([A-Za-z][\w+-]*):(.*)", re.DOTALL)
-# Generated tables by prefix: the function that makes the table of a name (see the docstring).
-_GENERATORS: dict[str, Callable[[str], Table]] = {}
-
-
-def register_generator(prefix: str, make: Callable[[str], Table]) -> None:
-    """Let :func:`load_any_table` take the names ``"PREFIX:..."``: ``make(name)`` returns the
-    table of such a name (or raises ``TableError``). Registering a prefix again replaces it."""
-    if not GENERATED_NAME.fullmatch(f"{prefix}:"):
-        raise ValueError(f"a generated table's prefix is a letter then letters, digits, _, - "
-                         f"or +, got {prefix!r}")  # fmt: skip
-    _GENERATORS[prefix] = make
-
-
-def generated_prefixes() -> tuple[str, ...]:
-    """The prefixes of generated tables' names that :func:`load_any_table` takes now."""
-    return tuple(sorted(_GENERATORS))
-
-
-def load_any_table(name_or_path: str | os.PathLike[str]) -> Table:
-    """:func:`load_table`, and the generated tables by name (``"procgen:SEED"``,
-    ``"procgen-hard:SEED"``, any registered prefix): what the envs, the plot tool and the
-    training configs take. A name ``PREFIX:...`` whose prefix no generator registered (not a
-    path to a file) is a ``TableError`` naming those that are."""
-    match = GENERATED_NAME.fullmatch(name_or_path) if isinstance(name_or_path, str) else None
-    if match is not None:
-        make = _GENERATORS.get(match[1])
-        if make is not None:
-            return make(name_or_path)
-        path = Path(name_or_path)
-        if path.suffix not in SUFFIXES and len(path.parts) == 1:
-            registered = ", ".join(generated_prefixes()) or "none"
-            raise TableError(
-                f"unknown table {_shorten(name_or_path, 120)!r}: no generator of tables is "
-                f"registered for the prefix {match[1]!r} (registered: {registered})"
-            )
-    return load_table(name_or_path)

@@ -1,5 +1,5 @@
 """A table's rules as data: lights, counters and timers, and rules that fire on a trigger and
-apply their effects (the ``rules`` section of a table file; ``schema`` validates it,
+apply their effects (the ``rules`` section of a table file; ``rules_schema`` validates it,
 ``game.rulebook`` plays it).
 
 A rule is ``when`` (one trigger) and ``do`` (effects, in order):
@@ -46,6 +46,28 @@ EFFECTS = (
     "extra_ball",
 )
 FLIPPER_BUTTONS = ("left", "right", "any")
+# What each trigger and effect names in a table file: the kind of name (elements, banks, lights,
+# buttons, counters, timers, kickbacks) and whether a list is allowed; None: a number instead.
+TRIGGER_NAMES: dict[str, tuple[str, bool]] = {
+    "hit": ("elements", True),
+    "bank": ("banks", False),
+    "lights_on": ("lights", True),
+    "flipper": ("buttons", False),
+    "counter": ("counters", False),
+    "timer_ends": ("timers", False),
+}
+EFFECT_NAMES: dict[str, tuple[str, bool] | None] = {
+    "light": ("lights", True),
+    "unlight": ("lights", True),
+    "rotate": ("lights", True),
+    "count": ("counters", False),
+    "start_timer": ("timers", False),
+    "light_kickback": ("kickbacks", False),
+    "score": None,
+    "bonus": None,
+    "multiplier": None,
+    "extra_ball": None,
+}
 # Events that are no rule's but are reported with them (``info["rule_events"]``).
 BALL_SAVED = "ball saved"
 BONUS_SCORED = "end-of-ball bonus"

@@ -1,0 +1,365 @@
+"""The table's elements in a description: materials, walls, posts, flippers, sensors, the
+plunger (and its skill shot), stand-up targets, drop banks, spinners and kickbacks, each with its
+keys and its physically sensible ranges, and the checks that tie them together (unique names,
+known materials, kickers that lose energy, and the geometry checks of
+:mod:`~pinball_env.table.geometry`).
+
+A value outside a range is a typo (or an attack): it would make the ball, the table or the work
+of a frame absurd.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from functools import partial
+from typing import Any
+
+from pinball_env.table.fields import (
+    Parser,
+    Where,
+    choice,
+    describe,
+    flag,
+    list_of,
+    listing,
+    name_of,
+    number,
+    pair,
+    point_list,
+    record,
+    score,
+    short,
+    string,
+    velocity_pair,
+)
+from pinball_env.table.geometry import (
+    check_lengths,
+    check_outline,
+    check_pivots,
+    check_swings,
+    solid_walls,
+)
+from pinball_env.table.model import (
+    BUTTONS,
+    DropBank,
+    DropTarget,
+    Flipper,
+    Kickback,
+    Material,
+    Plunger,
+    Post,
+    Sensor,
+    SkillShot,
+    Spinner,
+    StandupTarget,
+    Wall,
+)
+
+# How many of each element a table may have. They bound the work of a frame (every pass sweeps
+# the ball against every segment, post and flipper) and of loading a file.
+MAX_SEGMENTS = 2048  # over all walls
+MAX_POINTS = 1024  # per wall
+MAX_POSTS = 256
+MAX_FLIPPERS = 8
+MAX_SENSORS = 256
+MAX_DROP_TARGETS = 64  # over all banks
+MAX_SPINNERS = 16
+MAX_KICKBACKS = 8
+
+_post_radius = partial(number, low=0.001, high=1.0)  # [m]
+_flipper_length = partial(number, low=0.01, high=1.0)  # [m]: a real flipper is ~70 mm
+_flipper_radius = partial(number, low=0.001, high=0.1)  # [m]
+_kick = partial(number, low=0.0, high=10.0)  # [m/s]: a real pop bumper adds ~1.5 m/s
+
+
+def parse_elements(
+    raw: Mapping[str, Any], top: Where, point: Parser, materials: tuple[Material, ...]
+) -> dict[str, tuple[Any, ...]]:
+    """The walls, posts, flippers and sensors, by group name (the Table's fields), checked
+    together: unique names, known materials, no flipper pivot in a wall."""
+    post_parsers = {
+        "name": string,
+        "center": point,
+        "radius": _post_radius,
+        "material": string,
+        "kick": _kick,
+        "score": score,
+    }
+    post = partial(record, Post, parsers=post_parsers)
+    elements = {
+        "walls": _group(raw, top, "walls", partial(_wall, point=point), MAX_SEGMENTS),
+        "posts": _group(raw, top, "posts", post, MAX_POSTS),
+        "flippers": _group(raw, top, "flippers", partial(_flipper, point=point), MAX_FLIPPERS),
+        "sensors": _group(raw, top, "sensors", partial(_sensor, point=point), MAX_SENSORS),
+    }
+    elements.update(_target_groups(raw, top, point))
+    n_segments = sum(len(wall.segments()) for wall in elements["walls"])
+    n_segments += len(elements["standup_targets"])
+    if n_segments > MAX_SEGMENTS:
+        top.key("walls").fail(f"{n_segments} segments in all, at most {MAX_SEGMENTS} allowed")
+    targets = [t for bank in elements["drop_targets"] for t in bank.targets]
+    _check_elements({**elements, "drop_targets.targets": tuple(targets)}, materials, top)
+    _check_kickers(elements, materials, top)
+    check_outline(elements["walls"], top)
+    solid = {**elements, "walls": solid_walls(elements)}
+    check_pivots(elements["flippers"], solid["walls"], top)
+    check_swings(solid, top)
+    return elements
+
+
+def _group(
+    raw: Mapping[str, Any], top: Where, key: str, parse: Parser, max_len: int
+) -> tuple[Any, ...]:
+    """The optional list ``raw[key]`` of at most ``max_len`` elements, each parsed at its path
+    ``key[i] 'name'``."""
+    items = list_of(raw.get(key, []), top.key(key), max_len=max_len)
+    return tuple(parse(item, top.key(key).index(i, name_of(item))) for i, item in enumerate(items))
+
+
+def parse_materials(value: object, loc: Where) -> tuple[Material, ...]:
+    """The ``materials`` mapping (name -> restitution, friction), at least one."""
+    if not isinstance(value, Mapping) or not value:
+        loc.fail(f"expected a mapping of at least one material, got {describe(value)}")
+    if len(value) > MAX_POSTS:
+        loc.fail(f"{len(value)} materials, at most {MAX_POSTS} allowed")
+    parsers = {
+        # At most 1: a bounce never adds energy (kicks do, see _check_kickers).
+        "restitution": partial(number, low=0.0, high=1.0),
+        "friction": partial(number, low=0.0, high=2.0),
+    }
+    return tuple(
+        record(Material, item, loc.key(string(name, loc)), parsers, name=name)
+        for name, item in value.items()
+    )
+
+
+def _wall(value: object, loc: Where, point: Parser) -> Wall:
+    parsers = {
+        "closed": flag,
+        "material": string,
+        "one_sided": flag,
+        "kick": _kick,
+        "score": score,
+    }
+    wall = _line(Wall, value, loc, point, MAX_POINTS, parsers)
+    if wall.closed and len(wall.points) < 3:
+        loc.fail(f"a closed polyline needs at least 3 points, got {len(wall.points)}")
+    check_lengths(wall.segments(), loc)
+    return wall
+
+
+def _line(
+    cls: type, value: object, loc: Where, point: Parser, max_points: int, parsers: dict[str, Parser]
+) -> Any:
+    """A wall or a sensor: ``cls`` with a name, 2 to ``max_points`` points and ``parsers``' keys."""
+    points = partial(point_list, point=point, min_len=2, max_len=max_points)
+    return record(cls, value, loc, {"name": string, "points": points, **parsers})
+
+
+def _flipper(value: object, loc: Where, point: Parser) -> Flipper:
+    angle = partial(number, low=-360.0, high=360.0)
+    flipper = record(
+        Flipper,
+        value,
+        loc,
+        {
+            "name": string,
+            "pivot": point,
+            "length": _flipper_length,
+            "base_radius": _flipper_radius,
+            "tip_radius": _flipper_radius,
+            "rest_angle": angle,
+            "up_angle": angle,
+            "stroke_time": partial(number, low=0.005, high=0.2),
+            "return_time": partial(number, low=0.005, high=0.5),
+            "material": string,
+            "button": partial(choice, options=BUTTONS),
+            "score": score,
+        },
+    )
+    swing = abs(flipper.up_angle - flipper.rest_angle)
+    if not 0.0 < swing <= 90.0:
+        loc.key("up_angle").fail(
+            f"flipper swing must be in (0, 90] degrees, got {swing:g} (|up_angle - rest_angle|)"
+        )
+    taper = abs(flipper.base_radius - flipper.tip_radius)
+    if taper >= flipper.length:
+        loc.fail(
+            f"|base_radius - tip_radius| = {taper:g} must be < length {flipper.length:g} "
+            "(else one end circle swallows the other)"
+        )
+    return flipper
+
+
+def _sensor(value: object, loc: Where, point: Parser) -> Sensor:
+    sensor = _line(Sensor, value, loc, point, 2, {"drain": flag, "score": score})
+    check_lengths([sensor.segment], loc)
+    return sensor
+
+
+def parse_plunger(value: object, loc: Where, point: Parser) -> Plunger:
+    """The ``plunger``: a machine's (a launch speed range) or the player's (stroke, pull_time
+    and pull_speed together, and then a scatter and a skill shot if any)."""
+    speed = partial(pair, item=partial(number, low=0.0, high=20.0, open_low=True))
+    parsers = {
+        "position": point,
+        "speed": speed,
+        "stroke": partial(number, low=0.005, high=0.2),  # [m]: a real one pulls ~5 cm
+        "pull_time": partial(number, low=0.05, high=5.0),  # [s]
+        "pull_speed": speed,
+        "scatter": partial(number, low=0.0, high=1.0),  # [m/s]
+        "skill_shot": _skill_shot,
+    }
+    plunger = record(Plunger, value, loc, parsers)
+    for key in ("speed", "pull_speed"):
+        if getattr(plunger, key) is not None:
+            low, high = getattr(plunger, key)
+            if low > high:
+                loc.key(key).fail(f"expected [min, max] with min <= max, got [{low:g}, {high:g}]")
+    manual = [key for key in ("stroke", "pull_time", "pull_speed") if getattr(plunger, key) is None]
+    if len(manual) not in (0, 3):
+        loc.fail(
+            "a player's plunger needs stroke, pull_time and pull_speed together; missing "
+            + ", ".join(manual)
+        )
+    for key in ("skill_shot", "scatter"):
+        if getattr(plunger, key) and not plunger.manual:
+            loc.key(key).fail(f"a {key.replace('_', ' ')} needs the player's plunger (stroke, ...)")
+    if plunger.manual and plunger.scatter >= plunger.pull_speed[0]:
+        loc.key("scatter").fail(
+            f"a scatter of {plunger.scatter:g} m/s could stop the shortest pull's "
+            f"{plunger.pull_speed[0]:g} m/s launch (it must be smaller)"
+        )
+    return plunger
+
+
+def _skill_shot(value: object, loc: Where) -> SkillShot:
+    parsers = {
+        "sensor": string,
+        "bonus": score,
+        "time": partial(number, low=0.1, high=60.0),  # [s]
+    }
+    return record(SkillShot, value, loc, parsers)
+
+
+def _check_elements(
+    groups: Mapping[str, tuple[Any, ...]], materials: tuple[Material, ...], top: Where
+) -> None:
+    """Element names are unique across all groups and every material reference resolves."""
+    known = [m.name for m in materials]
+    seen: dict[str, str] = {}
+    for group, elements in groups.items():
+        for i, element in enumerate(elements):
+            loc = top.key(group).index(i, element.name)
+            if element.name in seen:
+                name = short(element.name)
+                loc.fail(f"duplicate element name {name} (also {seen[element.name]})")
+            seen[element.name] = loc.path
+            material = getattr(element, "material", None)  # sensors have none
+            if material is not None and material not in known:
+                loc.key("material").fail(
+                    f"unknown material {short(material)} (known: {listing(known)})"
+                )
+
+
+def _check_kickers(
+    groups: Mapping[str, tuple[Any, ...]], materials: tuple[Material, ...], top: Where
+) -> None:
+    """A kicking wall or post bounces with restitution below 1: a kick adds speed at every hit,
+    and only a lossy bounce keeps that bounded (at kick / (1 - restitution))."""
+    restitution = {m.name: m.restitution for m in materials}
+    for group in ("walls", "posts"):
+        for i, element in enumerate(groups[group]):
+            if element.kick > 0.0 and restitution[element.material] >= 1.0:
+                top.key(group).index(i, element.name).fail(
+                    f"a kicker needs a material with restitution < 1, got "
+                    f"{short(element.material)} with {restitution[element.material]:g} "
+                    "(the ball would gain speed at every hit, without bound)"
+                )
+
+
+# --- targets and rules ---------------------------------------------------------------------------
+
+
+def _two_points(value: object, loc: Where, point: Parser) -> tuple[tuple[float, float], ...]:
+    points = point_list(value, loc, point, 2, 2)
+    check_lengths([(*points[0], *points[1])], loc)
+    return points
+
+
+def _standup(value: object, loc: Where, point: Parser) -> StandupTarget:
+    parsers = {
+        "name": string,
+        "points": partial(_two_points, point=point),
+        "material": string,
+        "score": score,
+    }
+    return record(StandupTarget, value, loc, parsers)
+
+
+def _drop_bank(value: object, loc: Where, point: Parser) -> DropBank:
+    target_parsers = {"name": string, "points": partial(_two_points, point=point), "score": score}
+
+    def targets(items: object, where: Where) -> tuple[DropTarget, ...]:
+        items = list_of(items, where, 1, MAX_DROP_TARGETS)
+        return tuple(
+            record(DropTarget, item, where.index(i, name_of(item)), target_parsers)
+            for i, item in enumerate(items)
+        )
+
+    parsers = {
+        "name": string,
+        "material": string,
+        "targets": targets,
+        # [s]: at least a few frames, so that the rules see the bank down before it rises
+        "reset_time": partial(number, low=0.1, high=60.0),
+    }
+    return record(DropBank, value, loc, parsers)
+
+
+def _spinner(value: object, loc: Where, point: Parser) -> Spinner:
+    parsers = {
+        "name": string,
+        "points": partial(_two_points, point=point),
+        "radius": partial(number, low=0.002, high=0.1),  # [m]: a real flap is ~15 mm
+        "damping": partial(number, low=0.0, high=50.0),  # [1/s]
+        "friction": partial(number, low=0.0, high=1000.0),  # [rad/s^2]
+        "score": score,
+    }
+    return record(Spinner, value, loc, parsers)
+
+
+def _kickback(value: object, loc: Where, point: Parser) -> Kickback:
+    parsers = {
+        "name": string,
+        "points": partial(_two_points, point=point),
+        "kick": velocity_pair,
+        "lit": flag,
+        "score": score,
+    }
+    kickback = record(Kickback, value, loc, parsers)
+    if not 0.0 < math.hypot(*kickback.kick) <= 10.0:
+        loc.key("kick").fail(
+            f"kick speed {math.hypot(*kickback.kick):g} m/s must be in (0, 10] (a real kickback "
+            "fires the ball at a few m/s)"
+        )
+    return kickback
+
+
+def _target_groups(raw: Mapping[str, Any], top: Where, point: Parser) -> dict[str, tuple[Any, ...]]:
+    """The stand-up targets, drop banks, spinners and kickbacks, by group name."""
+    groups = {
+        "standup_targets": _group(
+            raw, top, "standup_targets", partial(_standup, point=point), MAX_SEGMENTS
+        ),
+        "drop_targets": _group(
+            raw, top, "drop_targets", partial(_drop_bank, point=point), MAX_DROP_TARGETS
+        ),
+        "spinners": _group(raw, top, "spinners", partial(_spinner, point=point), MAX_SPINNERS),
+        "kickbacks": _group(raw, top, "kickbacks", partial(_kickback, point=point), MAX_KICKBACKS),
+    }
+    n_targets = sum(len(bank.targets) for bank in groups["drop_targets"])
+    if n_targets > MAX_DROP_TARGETS:
+        top.key("drop_targets").fail(f"{n_targets} targets in all, at most {MAX_DROP_TARGETS}")
+    return groups

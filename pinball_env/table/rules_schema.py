@@ -1,0 +1,217 @@
+"""The ``rules`` section of a table description: lights, counters, timers and the rules that
+name them, parsed into a :class:`~pinball_env.table.rules.RuleSet` (the rules' data model) with
+every name checked against what the table declares, and a ring of rules that could fire for ever
+in one frame refused."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from functools import partial
+from typing import Any
+
+from pinball_env.table.fields import (
+    MAX_SCORE,
+    Parser,
+    Where,
+    describe,
+    flag,
+    list_of,
+    listing,
+    mapping,
+    name_of,
+    number,
+    record,
+    short,
+    string,
+)
+from pinball_env.table.rules import (
+    EFFECT_NAMES,
+    EFFECTS,
+    FLIPPER_BUTTONS,
+    TRIGGER_NAMES,
+    TRIGGERS,
+    Effect,
+    Light,
+    Rule,
+    RuleSet,
+    Timer,
+    Trigger,
+    find_cycle,
+)
+
+MAX_RULES = 256  # and as many lights, counters, timers
+MAX_MULTIPLIER = 100
+
+
+def _names(
+    value: object, loc: Where, known: Iterable[str], what: str, min_len: int = 1
+) -> tuple[str, ...]:
+    """A name or a list of names, each one of ``known`` (a ``what``)."""
+    items = [value] if isinstance(value, str) else list_of(value, loc, min_len, MAX_RULES)
+    known = list(known)
+    for i, name in enumerate(items):
+        where = loc if isinstance(value, str) else loc.index(i)
+        string(name, where)
+        if name not in known:
+            where.fail(f"unknown {what} {short(name)} (known: {listing(known) or 'none'})")
+    if len(set(items)) != len(items):
+        loc.fail(f"a {what} is named twice")
+    return tuple(items)
+
+
+def parse_rules(
+    value: object, loc: Where, point: Parser, names: Mapping[str, tuple[str, ...]]
+) -> RuleSet:
+    """The ``rules`` section; ``names`` lists the table's names of each kind (elements, banks,
+    kickbacks) that rules may refer to."""
+    raw = mapping(value, loc, [], ["lights", "counters", "timers", "max_multiplier", "rules"])
+    lights, counters, timers = _declarations(raw, loc, point, names["elements"])
+    known = {
+        **names,
+        "lights": tuple(x.name for x in lights),
+        "counters": counters,
+        "timers": tuple(x.name for x in timers),
+    }
+    max_multiplier = number(
+        raw.get("max_multiplier", 1), loc.key("max_multiplier"), 1, MAX_MULTIPLIER, integer=True
+    )
+    items = list_of(raw.get("rules", []), loc.key("rules"), 0, MAX_RULES)
+    rules = tuple(
+        _rule(item, loc.key("rules").index(i, name_of(item)), known) for i, item in enumerate(items)
+    )
+    named = [rule.name for rule in rules]
+    if len(set(named)) != len(named):
+        duplicate = next(name for name in named if named.count(name) > 1)
+        loc.key("rules").fail(f"two rules are named {short(duplicate)}")
+    rule_set = RuleSet(lights, counters, timers, max_multiplier, rules)
+    _check_no_ring(rule_set, loc.key("rules"))
+    return rule_set
+
+
+def _declarations(
+    raw: Mapping[str, Any], loc: Where, point: Parser, elements: tuple[str, ...]
+) -> tuple[tuple[Light, ...], tuple[str, ...], tuple[Timer, ...]]:
+    """The lights, counters and timers that the rules name, each name given once; a timer's
+    ``elements`` are among the table's ``elements``."""
+
+    def listed(key: str) -> list[Any]:
+        return list_of(raw.get(key, []), loc.key(key), 0, MAX_RULES)
+
+    light_parsers = {"name": string, "at": point, "lit": flag}
+    lights = tuple(
+        record(Light, item, loc.key("lights").index(i, name_of(item)), light_parsers)
+        for i, item in enumerate(listed("lights"))
+    )
+    counters = tuple(
+        string(item, loc.key("counters").index(i)) for i, item in enumerate(listed("counters"))
+    )
+    timer_parsers = {
+        "name": string,
+        "time": partial(number, low=0.0, high=600.0, open_low=True),  # [s]
+        "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
+        "elements": partial(_names, known=elements, what="element", min_len=0),
+    }
+    timers = tuple(
+        record(Timer, item, loc.key("timers").index(i, name_of(item)), timer_parsers)
+        for i, item in enumerate(listed("timers"))
+    )
+    for key, items in (("lights", [x.name for x in lights]), ("counters", list(counters)),
+                       ("timers", [x.name for x in timers])):  # fmt: skip
+        if len(set(items)) != len(items):
+            duplicate = next(name for name in items if items.count(name) > 1)
+            loc.key(key).fail(f"{short(duplicate)} is named twice")
+    return lights, counters, timers
+
+
+def _check_no_ring(rule_set: RuleSet, loc: Where) -> None:
+    """No rules trigger one another in a ring (they could fire for ever in one frame)."""
+    cycle = find_cycle(rule_set)
+    if cycle:
+        ring = " -> ".join(repr(rule_set.rules[i].name) for i in cycle)
+        loc.fail(
+            f"rules {ring} trigger one another in a ring: they could fire for ever in one frame"
+        )
+
+
+def _rule(value: object, loc: Where, known: Mapping[str, tuple[str, ...]]) -> Rule:
+    raw = mapping(value, loc, ["name", "when", "do"])
+    name = string(raw["name"], loc.key("name"))
+    when = _trigger(raw["when"], loc.key("when"), known)
+    effects = list_of(raw["do"], loc.key("do"), 1, MAX_RULES)
+    do = tuple(_effect(item, loc.key("do").index(i), known) for i, item in enumerate(effects))
+    return Rule(name, when, do)
+
+
+# What each trigger and effect names: the kind of name (a key of the known names) and whether a
+# list is allowed; None: a number.
+
+_KIND_WORDS = {"elements": "element", "banks": "drop bank", "lights": "light",
+               "buttons": "flipper button", "counters": "counter", "timers": "timer",
+               "kickbacks": "kickback"}  # fmt: skip
+
+
+def _one_key(value: object, loc: Where, kinds: tuple[str, ...], extra: tuple[str, ...]) -> str:
+    """The one key of ``kinds`` in mapping ``value`` (which may hold ``extra`` keys too)."""
+    raw = mapping(value, loc, [], (*kinds, *extra))
+    given = [key for key in raw if key in kinds]
+    if len(given) != 1:
+        loc.fail(f"expected exactly one of {', '.join(kinds)}, got {', '.join(given) or 'none'}")
+    return given[0]
+
+
+def _named(
+    value: object, loc: Where, spec: tuple[str, bool], known: Mapping[str, Any]
+) -> tuple[str, ...]:
+    kind, many = spec
+    if not many and not isinstance(value, str):
+        loc.fail(f"expected the name of a {_KIND_WORDS[kind]}, got {describe(value)}")
+    return _names(value, loc, known[kind], _KIND_WORDS[kind])
+
+
+def _trigger(value: object, loc: Where, known: Mapping[str, Any]) -> Trigger:
+    kind = _one_key(value, loc, TRIGGERS, ("at",))
+    names = _named(value[kind], loc.key(kind), TRIGGER_NAMES[kind], known)
+    if ("at" in value) != (kind == "counter"):
+        loc.fail("'at' goes with a counter trigger, and a counter trigger needs it")
+    at = number(value["at"], loc.key("at"), 1, 10**6, integer=True) if kind == "counter" else 0
+    return Trigger(kind, names, at)
+
+
+def _effect(value: object, loc: Where, known: Mapping[str, Any]) -> Effect:
+    kind = _one_key(value, loc, EFFECTS, ("by",))
+    if "by" in value and kind != "count":
+        loc.fail("'by' goes with a count effect only")
+    spec = EFFECT_NAMES[kind]
+    if spec is None:
+        high = {"score": MAX_SCORE, "bonus": MAX_SCORE, "multiplier": MAX_MULTIPLIER,
+                "extra_ball": 10}[kind]  # fmt: skip
+        return Effect(kind, (), number(value[kind], loc.key(kind), 1, high, integer=True))
+    names = _named(value[kind], loc.key(kind), spec, known)
+    if kind == "rotate" and len(names) < 2:
+        loc.key(kind).fail("rotate needs at least two lights")
+    by = number(value.get("by", 1), loc.key("by"), 1, 10**6, integer=True)
+    return Effect(kind, names, by if kind == "count" else 0)
+
+
+_NAMED_GROUPS = (
+    "walls",
+    "standup_targets",
+    "posts",
+    "flippers",
+    "sensors",
+    "spinners",
+    "kickbacks",
+)
+
+
+def rule_names(table_elements: Mapping[str, tuple[Any, ...]]) -> dict[str, tuple[str, ...]]:
+    """What the rules of a table with these element groups may name."""
+    groups = table_elements
+    elements = [e.name for group in _NAMED_GROUPS for e in groups.get(group, ())]
+    elements += [t.name for bank in groups.get("drop_targets", ()) for t in bank.targets]
+    return {
+        "elements": tuple(elements),
+        "banks": tuple(bank.name for bank in groups.get("drop_targets", ())),
+        "kickbacks": tuple(k.name for k in groups.get("kickbacks", ())),
+        "buttons": FLIPPER_BUTTONS,
+    }

@@ -1,0 +1,95 @@
+"""A table written back as a description: :func:`table_to_dict` gives the plain lists and dicts
+that :func:`~pinball_env.table.schema.table_from_dict` reads back as the same table (the YAML
+files are ``files.dump_table``'s)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import fields
+from typing import Any
+
+from pinball_env.table.model import Plunger, Table
+from pinball_env.table.rules import EFFECT_NAMES, TRIGGER_NAMES, Effect, RuleSet, Trigger
+
+
+def table_to_dict(table: Table) -> dict[str, Any]:
+    """The description that :func:`table_from_dict` reads back as ``table`` (plain lists and
+    dicts, ready for ``yaml.safe_dump``)."""
+
+    def plain(element: Any, drop: tuple[str, ...] = ()) -> dict[str, Any]:
+        return {k: v for k, v in _plain(dataclasses.asdict(element)).items() if k not in drop}
+
+    data: dict[str, Any] = {
+        "name": table.name,
+        "playfield": {"width": table.width, "height": table.height},
+        "slope_deg": table.slope_deg,
+        "gravity": table.gravity,
+        "ball": plain(table.ball),
+        "materials": {m.name: plain(m, drop=("name",)) for m in table.materials},
+    }
+    for group in ("walls", "posts", "flippers", "sensors"):
+        data[group] = [plain(element) for element in getattr(table, group)]
+    # Targets and rules only where the table has them (older tables write as they did).
+    for group in ("standup_targets", "drop_targets", "spinners", "kickbacks"):
+        if getattr(table, group):
+            data[group] = [plain(element) for element in getattr(table, group)]
+    if table.ball_save is not None:
+        data["ball_save"] = plain(table.ball_save)
+    if table.rules is not None:
+        data["rules"] = rules_to_dict(table.rules)
+    if table.plunger is not None:
+        # The player's plunger's fields only where set: a machine's plunger writes as it always
+        # did (digests of tables, such as a recording's, stay the same).
+        defaults = {f.name: f.default for f in fields(Plunger)}
+        data["plunger"] = {
+            key: value for key, value in plain(table.plunger).items()
+            if _plain(defaults[key]) != value
+        }  # fmt: skip
+    if table.cabinet is not None:
+        data["cabinet"] = plain(table.cabinet)
+    if table.tilt is not None:
+        # settle_time only where set: a tilt without one writes as it always did.
+        data["tilt"] = plain(table.tilt, drop=() if table.tilt.settle_time else ("settle_time",))
+    data["simulation"] = plain(table.simulation)
+    return data
+
+
+def _plain(value: Any) -> Any:
+    """``value`` with tuples turned into lists, in nested dicts and lists too."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
+    """The ``rules`` section as :func:`parse_rules` reads it."""
+
+    def names(spec: tuple[str, bool] | None, values: tuple[str, ...]) -> Any:
+        return list(values) if spec[1] else values[0]
+
+    def trigger(when: Trigger) -> dict[str, Any]:
+        out = {when.kind: names(TRIGGER_NAMES[when.kind], when.names)}
+        return {**out, "at": when.at} if when.kind == "counter" else out
+
+    def effect(do: Effect) -> dict[str, Any]:
+        spec = EFFECT_NAMES[do.kind]
+        if spec is None:
+            return {do.kind: do.value}
+        out = {do.kind: names(spec, do.names)}
+        return {**out, "by": do.value} if do.kind == "count" else out
+
+    return {
+        "lights": [{"name": x.name, "at": list(x.at), "lit": x.lit} for x in rules.lights],
+        "counters": list(rules.counters),
+        "timers": [
+            {"name": x.name, "time": x.time, "factor": x.factor, "elements": list(x.elements)}
+            for x in rules.timers
+        ],
+        "max_multiplier": rules.max_multiplier,
+        "rules": [
+            {"name": r.name, "when": trigger(r.when), "do": [effect(e) for e in r.do]}
+            for r in rules.rules
+        ],
+    }
