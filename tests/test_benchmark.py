@@ -347,7 +347,7 @@ def test_the_protocol_evaluation_plays_sticky_held_out_games(tmp_path):
     with open(tmp_path / "episodes.csv") as file:
         scores = [int(row["score"]) for row in csv.DictReader(file)]
     # The same games by hand: the env with the protocol's options, the heuristic playing.
-    from pinball_env.heuristic import HeuristicPolicy
+    from pinball_env.players import HeuristicPolicy
 
     for seed, score in zip((100_000, 100_001), scores, strict=True):
         env = gym.make("Pinball-v1", **protocol.protocol_options("Pinball-v1"))

@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import pinball_env
-from pinball_env.heuristic import HeuristicPolicy
+from pinball_env.players import HeuristicPolicy
 from pinball_env.table import TableError, builtin_tables_dir, load_table
 from pinball_env.tools.demo import main as demo_main
 
