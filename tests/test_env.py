@@ -58,7 +58,7 @@ def _headless(monkeypatch):
 
 def test_registration_and_time_limit():
     spec = gym.spec("Pinball-v0")
-    assert spec.entry_point == "pinball_env.env:PinballEnv"
+    assert spec.entry_point == "pinball_env.envs:PinballEnv"
     assert spec.max_episode_steps == pinball_env.MAX_EPISODE_STEPS
     env = gym.make("Pinball-v0")
     assert isinstance(env.action_space, gym.spaces.Discrete) and env.action_space.n == 4
