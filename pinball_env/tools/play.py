@@ -371,8 +371,8 @@ class PlayLoop:
         self.env.close()
 
 
-def main(argv: list[str] | None = None) -> list[int]:
-    """The command line; returns the scores of the games played or replayed."""
+def parser() -> argparse.ArgumentParser:
+    """The command line's arguments."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "--env",
@@ -389,57 +389,74 @@ def main(argv: list[str] | None = None) -> list[int]:
     modes.add_argument("--record", type=Path, help="write the games played to this JSON file")
     modes.add_argument("--replay", type=Path, help="play a recording back and check its scores")
     parser.add_argument("--headless", action="store_true", help="replay without a window")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> list[int]:
+    """The command line; returns the scores of the games played or replayed."""
+    command = parser()
+    args = command.parse_args(argv)
     if args.seed is not None and args.seed < 0:
-        parser.error(f"--seed must be >= 0, got {args.seed}")
+        command.error(f"--seed must be >= 0, got {args.seed}")
     if args.protocol and args.table:
-        parser.error("--protocol plays the env's own table")
+        command.error("--protocol plays the env's own table")
     if args.replay is not None and (
         args.env or args.table or args.seed is not None or args.protocol
     ):
-        parser.error("--replay takes the env, the table and the seeds from the recording")
+        command.error("--replay takes the env, the table and the seeds from the recording")
     if args.headless and args.replay is None:
-        parser.error("--headless is for --replay: playing needs a window")
+        command.error("--headless is for --replay: playing needs a window")
     window = not args.headless and has_display()
     if window or args.replay is None:  # a headless replay needs no pygame
         try:  # checked before anything is played
             Window.import_pygame()
         except gym.error.DependencyNotInstalled as error:
             raise SystemExit(str(error)) from None
-
     if args.replay is not None:
-        try:
-            recording = load_recording(args.replay)
-            if not window and not args.headless:
-                print("no display found: replaying headless")
-            scores = replay(recording, window=window)
-        except RecordingError as error:
-            raise SystemExit(f"refused: {error}") from None
-        except ReplayStopped as stopped:
-            print(stopped)
-            return []
-        for game, score in zip(recording.games, scores, strict=True):
-            print(f"seed {game.seed}: score {score} in {game.frames} frames, as recorded")
-        return scores
-
+        return replay_file(args.replay, window, args.headless)
     if not window:
         raise SystemExit(
             "no display found: playing needs a window (--replay FILE --headless replays without)"
         )
-    options = {} if args.table is None else {"table": args.table}
-    if args.protocol:
-        options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
     env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_ID)
     if args.protocol and env_id not in PROTOCOL_ENV_IDS:
-        parser.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
-    loop = PlayLoop(options, args.seed, args.record, env_id=env_id)
+        command.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
+    return play(env_id, args.table, args.seed, args.record, args.protocol)
+
+
+def replay_file(path: Path, window: bool, headless: bool) -> list[int]:
+    """``--replay``: the recording at ``path`` played back (in a window with ``window``) and
+    checked; its scores ([] when the viewer stopped it)."""
+    try:
+        recording = load_recording(path)
+        if not window and not headless:
+            print("no display found: replaying headless")
+        scores = replay(recording, window=window)
+    except RecordingError as error:
+        raise SystemExit(f"refused: {error}") from None
+    except ReplayStopped as stopped:
+        print(stopped)
+        return []
+    for game, score in zip(recording.games, scores, strict=True):
+        print(f"seed {game.seed}: score {score} in {game.frames} frames, as recorded")
+    return scores
+
+
+def play(
+    env_id: str, table: str | None, seed: int | None, record: Path | None, protocol: bool
+) -> list[int]:
+    """A session on the keyboard (``--record``: written to that file); the games' scores."""
+    options: dict[str, Any] = {} if table is None else {"table": table}
+    if protocol:
+        options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
+    loop = PlayLoop(options, seed, record, env_id=env_id)
     print(keys_help(Window.import_pygame(), loop.env.unwrapped.game.cabinet))
     try:
         loop.run()
     finally:
         loop.close()
-    if args.record is not None and loop.games:
-        print(f"wrote {args.record}")
+    if record is not None and loop.games:
+        print(f"wrote {record}")
     return [game.score for game in loop.games]
 
 
