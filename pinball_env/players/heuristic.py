@@ -248,21 +248,26 @@ class HeuristicPolicy:
         self.post_lead = post_lead
         self._shoves: list[tuple[int, float, float]] = []  # (frame, dx, dy) of its own nudges
         if self.cabinet:
-            rate = table.simulation.frame_rate
-            pulls = plunger_pulls(table)
-            self._release = pulls[skill_shot_frames(table) - 1] - 0.5 * pulls[0]
-            self._outlanes = Outlane.of(table)
-            self._bob = bob_response(table)
-            ring = math.radians(table.tilt.ring_angle)
-            self._ring = tilt_margin * ring
-            # The kernel's bob stops at the ring: a response that reaches it is a touch.
-            self._shove_warns = bool(np.abs(self._bob).max() >= ring * (1.0 - 1e-9))
-            self._nudge_frames = max(1, round(table.cabinet.nudge_interval * rate))
-            names = button_names(cabinet=True)
-            self._nudge_buttons = {
-                (-1.0, 0.0): names.index("nudge_left") - len(BUTTONS),
-                (1.0, 0.0): names.index("nudge_right") - len(BUTTONS),
-            }
+            self._prepare_cabinet(table, tilt_margin)
+
+    def _prepare_cabinet(self, table: Table, tilt_margin: float) -> None:
+        """What the plunge and the nudges need of a table with the cabinet: the skill shot's
+        release, the outlanes, the bob's response to a shove and the tilt ring's margin."""
+        rate = table.simulation.frame_rate
+        pulls = plunger_pulls(table)
+        self._release = pulls[skill_shot_frames(table) - 1] - 0.5 * pulls[0]
+        self._outlanes = Outlane.of(table)
+        self._bob = bob_response(table)
+        ring = math.radians(table.tilt.ring_angle)
+        self._ring = tilt_margin * ring
+        # The kernel's bob stops at the ring: a response that reaches it is a touch.
+        self._shove_warns = bool(np.abs(self._bob).max() >= ring * (1.0 - 1e-9))
+        self._nudge_frames = max(1, round(table.cabinet.nudge_interval * rate))
+        names = button_names(cabinet=True)
+        self._nudge_buttons = {
+            (-1.0, 0.0): names.index("nudge_left") - len(BUTTONS),
+            (1.0, 0.0): names.index("nudge_right") - len(BUTTONS),
+        }
 
     def reset(self) -> None:
         """Forget the last game: every flipper down, no nudges given."""
