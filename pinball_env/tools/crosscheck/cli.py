@@ -14,7 +14,7 @@ from pinball_env.tools.crosscheck.plots import plot
 from pinball_env.tools.crosscheck.report import headline_figures, print_report
 from pinball_env.tools.crosscheck.scenarios import (
     DROP_TIME_TOLERANCE,
-    FLIPPER_TOLERANCE,
+    FLIPPER_SPEED_TOLERANCE,
     LOW_SPEED,
     ROUNDING,
     SUBSTEP,
@@ -45,7 +45,7 @@ def run(out: Path, trials: int = 100, free_frames: int = 600) -> dict[str, Any]:
             "drop_contact_time_s": DROP_TIME_TOLERANCE,
             "velocity_relative": VELOCITY_TOLERANCE[0],
             "velocity_absolute_m_per_s": VELOCITY_TOLERANCE[1],
-            "flipper_relative": FLIPPER_TOLERANCE,
+            "flipper_relative": FLIPPER_SPEED_TOLERANCE,
             "rounding": ROUNDING,
             "plunger_gate_time_s": SUBSTEP / 2.0,
         },

@@ -7,7 +7,7 @@ from pinball_env.tools.crosscheck.scenarios import (
     CABINET_TABLE,
     DROP_TIME_TOLERANCE,
     ENGINES,
-    FLIPPER_TOLERANCE,
+    FLIPPER_SPEED_TOLERANCE,
     FRAME_RATE,
     LOW_SPEED,
     ROUNDING,
@@ -114,7 +114,7 @@ def _findings(
     drops = report["flipper_drop"]
     drop_agree = all(
         0.0 <= row["time_difference"] <= DROP_TIME_TOLERANCE + 1e-9
-        and row["relative_speed_difference"] <= FLIPPER_TOLERANCE
+        and row["relative_speed_difference"] <= FLIPPER_SPEED_TOLERANCE
         for row in drops
     )
     swing_worst = max(row["relative_difference"] for row in report["flipper_swing"])
@@ -129,9 +129,9 @@ def _findings(
         f"up to {1e3 * max(row['time_difference'] for row in drops):.2f} ms later in pymunk "
         "(one substep from its integration order, one from detection) and bounces within "
         f"{100 * max(row['relative_speed_difference'] for row in drops):.1f}% of our speed.",
-        f"{'Agree' if swing_worst <= FLIPPER_TOLERANCE else 'DISAGREE'}: a swinging flipper "
+        f"{'Agree' if swing_worst <= FLIPPER_SPEED_TOLERANCE else 'DISAGREE'}: a swinging flipper "
         f"launches a resting ball at speeds within {100 * swing_worst:.1f}% of each other "
-        f"(tolerance {100 * FLIPPER_TOLERANCE:.0f}%).",
+        f"(tolerance {100 * FLIPPER_SPEED_TOLERANCE:.0f}%).",
         "Differ, by design: Chipmunk integrates positions before velocities, we integrate "
         "velocities first, so in free flight the paths differ by g h t: after 11 frames "
         f"measured {1e3 * drift:.3f} mm, predicted {1e3 * g_h * 11 / FRAME_RATE:.3f} mm.",

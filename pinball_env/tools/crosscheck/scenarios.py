@@ -59,11 +59,11 @@ from pinball_env.physics.columns import (
     CABINET_VY,
 )
 from pinball_env.physics.flipper import flipper_distance
-from pinball_env.sim.backends import make_world
+from pinball_env.sim.backends import PHYSICS, make_world
 from pinball_env.sim.world import World
 from pinball_env.table import BUTTONS, Table, load_table, table_from_dict, table_to_dict
 
-ENGINES = ("swept", "pymunk")
+ENGINES = PHYSICS  # the engines compared: ours ("swept") and pymunk
 RADIUS = 0.0135
 SUBSTEPS = 10
 FRAME_RATE = 60.0
@@ -72,7 +72,7 @@ LOW_SPEED = 4.0  # [m/s]: at most half a ball radius per substep
 TIME_TOLERANCE = SUBSTEP
 DROP_TIME_TOLERANCE = 2 * SUBSTEP
 VELOCITY_TOLERANCE = (0.01, 0.001)  # relative to the incoming speed, absolute [m/s]
-FLIPPER_TOLERANCE = 0.10  # relative
+FLIPPER_SPEED_TOLERANCE = 0.10  # relative: the flipper scenarios' speeds
 HIT_TIME = 0.1  # [s] every aimed scenario is set up to meet its target after this time
 # Agreement to rounding [m/s, m]: both engines do the same arithmetic, in another order.
 ROUNDING = 1e-9
