@@ -38,7 +38,7 @@ VECTOR_ONLY_KWARGS = ("max_episode_steps",)
 FORBIDDEN_ENV_KWARGS = ("render_mode", "num_threads", "autoreset_mode")
 # The agents train on the native vector env of the pinball envs: ids registered with this entry
 # point (Pinball-v0, PinballProcgen-v0, or another id registered with it).
-PINBALL_ENTRY_POINT = "pinball_env.env:PinballEnv"
+PINBALL_ENTRY_POINT = "pinball_env.envs:PinballEnv"
 
 
 class ConfigError(ValueError):

@@ -120,10 +120,10 @@ def evaluate(
 
 def score_recording(path: Path, out: Path | None = None) -> dict[str, Any]:
     """Score the games of a play-tool recording (a human's) on the benchmark protocol: each
-    game replayed and checked (``pinball_env.tools.play.replay``), the recording refused
+    game replayed and checked (``pinball_env.recording.replay``), the recording refused
     unless it is of a protocol env with the protocol's game and sticky actions; the summary
     (the protocol's metrics of its games) is written to ``out`` (default ``evals/human``)."""
-    from pinball_env.tools.play import RecordingError, load_recording, replay
+    from pinball_env.recording import RecordingError, load_recording, replay
 
     try:
         recording = load_recording(path)
@@ -160,7 +160,7 @@ def score_recording(path: Path, out: Path | None = None) -> dict[str, Any]:
 def check_recording(recording: Any) -> None:
     """RecordingError unless ``recording`` was played on the protocol's game: a protocol env,
     its own table, 3 balls, two minutes, sticky actions of the protocol, one frame a step."""
-    from pinball_env.tools.play import RecordingError
+    from pinball_env.recording import RecordingError
 
     options = dict(recording.options)
     try:

@@ -14,7 +14,7 @@ import numpy as np
 from agents.config import AnyConfig, ConfigError, TrainConfig, config_from_dict
 from agents.envs import make_env
 from agents.policy import ObsNormalization, load_policy
-from pinball_env.heuristic import HeuristicPolicy
+from pinball_env.players import HeuristicPolicy
 
 BASELINES = ("random", "heuristic")
 # The baselines play frame by frame, on the model's table (or layouts) with the default rewards.

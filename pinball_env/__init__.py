@@ -23,12 +23,11 @@ from pinball_env.options import GENERATED, MAX_EPISODE_STEPS
 
 __version__ = "0.1.0"
 
-# The entry points keep the names saved env specs know (pinball_env.env and .vector_env
-# re-export the classes of pinball_env.envs).
+# The entry points: the classes' one home, pinball_env.envs.
 register(
     id="Pinball-v0",
-    entry_point="pinball_env.env:PinballEnv",
-    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    entry_point="pinball_env.envs:PinballEnv",
+    vector_entry_point="pinball_env.envs:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
 )
 
@@ -36,8 +35,8 @@ register(
 # the full action set (32 discrete actions).
 register(
     id="Pinball-v1",
-    entry_point="pinball_env.env:PinballEnv",
-    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    entry_point="pinball_env.envs:PinballEnv",
+    vector_entry_point="pinball_env.envs:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"table": "classic_v1"},
 )
@@ -46,8 +45,8 @@ register(
 # the protocol's env.
 register(
     id="Pinball-v2",
-    entry_point="pinball_env.env:PinballEnv",
-    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    entry_point="pinball_env.envs:PinballEnv",
+    vector_entry_point="pinball_env.envs:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"table": "classic_v2"},
 )
@@ -55,8 +54,8 @@ register(
 # The same envs on a generated table each game (the table source "generated").
 register(
     id="PinballProcgen-v0",
-    entry_point="pinball_env.env:PinballEnv",
-    vector_entry_point="pinball_env.vector_env:PinballVectorEnv",
+    entry_point="pinball_env.envs:PinballEnv",
+    vector_entry_point="pinball_env.envs:PinballVectorEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"table": GENERATED},
 )

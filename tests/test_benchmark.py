@@ -20,7 +20,7 @@ from agents.evaluate import main as evaluate_main
 from agents.policy import load_policy
 from agents.runs import MODEL_FILE
 from pinball_env import protocol
-from pinball_env.tools import play
+from pinball_env.recording import GameRecord, Recording, make_env, table_sha256, write_recording
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -296,7 +296,7 @@ def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
 
 def protocol_recording(path: Path, options: dict, seeds: list[int]) -> list[int]:
     """Write a play-tool recording of random play of Pinball-v0 with ``options``."""
-    env = play.make_env(options, 7200, "Pinball-v0")
+    env = make_env(options, 7200, "Pinball-v0")
     rng = np.random.default_rng(0)
     games = []
     for seed in seeds:
@@ -307,11 +307,11 @@ def protocol_recording(path: Path, options: dict, seeds: list[int]) -> list[int]
             _, _, terminated, truncated, info = env.step(actions[-1])
             done = terminated or truncated
         end = "game over" if terminated else "time limit"
-        games.append(play.GameRecord(seed, "".join(map(str, actions)), info["score"],
-                                     info["frames"], end))  # fmt: skip
-    recording = play.Recording("Pinball-v0", {"table": "classic", **options}, 7200,
-                               play.table_sha256(env.unwrapped.table), tuple(games))  # fmt: skip
-    play.write_recording(path, recording)
+        games.append(GameRecord(seed, "".join(map(str, actions)), info["score"],
+                                info["frames"], end))  # fmt: skip
+    recording = Recording("Pinball-v0", {"table": "classic", **options}, 7200,
+                          table_sha256(env.unwrapped.table), tuple(games))  # fmt: skip
+    write_recording(path, recording)
     return [game.score for game in games]
 
 
@@ -347,7 +347,7 @@ def test_the_protocol_evaluation_plays_sticky_held_out_games(tmp_path):
     with open(tmp_path / "episodes.csv") as file:
         scores = [int(row["score"]) for row in csv.DictReader(file)]
     # The same games by hand: the env with the protocol's options, the heuristic playing.
-    from pinball_env.heuristic import HeuristicPolicy
+    from pinball_env.players import HeuristicPolicy
 
     for seed, score in zip((100_000, 100_001), scores, strict=True):
         env = gym.make("Pinball-v1", **protocol.protocol_options("Pinball-v1"))

@@ -1,5 +1,5 @@
-"""The benchmark's --compare (the same figures for a git revision, alternating) and its table
-generation figure, on tiny budgets: shapes and plumbing, never timings."""
+"""The speed benchmark's --compare (the same figures for a git revision, alternating) and its
+table generation figure, on tiny budgets: shapes and plumbing, never timings."""
 
 import json
 import subprocess
@@ -7,14 +7,14 @@ from pathlib import Path
 
 import pytest
 
-from pinball_env.tools import benchmark
+from benchmarks import compare, speed
 
-ROOT = Path(benchmark.__file__).resolve().parents[2]
+ROOT = Path(speed.__file__).resolve().parents[1]
 
 
 def in_git_checkout() -> bool:
     try:
-        benchmark.git(ROOT, "rev-parse", "HEAD")
+        compare.git(ROOT, "rev-parse", "HEAD")
     except (OSError, subprocess.CalledProcessError):
         return False
     return True
@@ -24,14 +24,14 @@ needs_git = pytest.mark.skipif(not in_git_checkout(), reason="needs the git chec
 
 
 def test_the_command_line():
-    args = benchmark.parser().parse_args(["--quick", "--compare", "b18d650", "--repeats", "3"])
+    args = speed.parser().parse_args(["--quick", "--compare", "b18d650", "--repeats", "3"])
     assert (args.quick, args.compare, args.repeats, args.seed) == (True, "b18d650", 3, 0)
-    args = benchmark.parser().parse_args([])
+    args = speed.parser().parse_args([])
     assert (args.quick, args.compare, args.repeats, args.json) == (False, None, 1, None)
     with pytest.raises(SystemExit):
-        benchmark.main(["--compare", "HEAD", "--repeats", "0"])
+        speed.main(["--compare", "HEAD", "--repeats", "0"])
     with pytest.raises(SystemExit):
-        benchmark.main(["--worker", "kernel"])  # without --json-out
+        speed.main(["--worker", "kernel"])  # without --json-out
 
 
 def fake_groups(quick, seed):
@@ -47,7 +47,7 @@ def test_compare_alternates_and_reports_both_trees_and_the_ratios(monkeypatch, t
     def fake_worker(script, tree, name, quick, seed):
         side = "checkout" if tree == ROOT else "rev"
         calls.append((name, side))
-        assert script.read_text() == Path(benchmark.__file__).read_text()
+        assert script.read_text() == Path(speed.__file__).read_text()
         if name == "kernel" and side == "checkout":  # a figure the checkout cannot measure
             return {}, "\x1b[1mImportError: no kernel\x1b[0m\nmore"
         if name == "kernel":
@@ -55,11 +55,11 @@ def test_compare_alternates_and_reports_both_trees_and_the_ratios(monkeypatch, t
         value = {"native1024_2thread": 400.0, "sync8_pymunk": 10.0}[name]
         return {f"{name}_steps_per_second": value * (2 if side == "checkout" else 1)}, None
 
-    monkeypatch.setattr(benchmark, "groups", fake_groups)
-    monkeypatch.setattr(benchmark, "run_worker", fake_worker)
-    monkeypatch.setattr(benchmark, "unpack_revision", lambda repo, rev: ("f" * 40, tmp_path))
+    monkeypatch.setattr(speed, "groups", fake_groups)
+    monkeypatch.setattr(compare, "run_worker", fake_worker)
+    monkeypatch.setattr(compare, "unpack_revision", lambda repo, rev: ("f" * 40, tmp_path))
     out = tmp_path / "bench.json"
-    result = benchmark.main(["--quick", "--compare", "old", "--repeats", "2", "--json", str(out)])
+    result = speed.main(["--quick", "--compare", "old", "--repeats", "2", "--json", str(out)])
     saved = json.loads(out.read_text())
     assert saved == json.loads(json.dumps(result))
     # Measurement by measurement, each tree once per repeat, which goes first alternating.
@@ -100,23 +100,23 @@ def test_compare_alternates_and_reports_both_trees_and_the_ratios(monkeypatch, t
 
 @needs_git
 def test_a_revision_is_unpacked_once_and_its_workers_import_its_package(monkeypatch, tmp_path):
-    monkeypatch.setenv(benchmark.CACHE_ENV, str(tmp_path / "cache"))
-    sha, tree = benchmark.unpack_revision(ROOT, "HEAD")
+    monkeypatch.setenv(compare.CACHE_ENV, str(tmp_path / "cache"))
+    sha, tree = compare.unpack_revision(ROOT, "HEAD")
     assert tree == tmp_path / "cache" / sha and len(sha) == 40
     assert {path.name for path in tree.iterdir()} == {"pinball_env", "agents", "configs"}
-    assert benchmark.unpack_revision(ROOT, "HEAD") == (sha, tree)  # reused
-    with pytest.raises(benchmark.RevisionError, match="not a revision"):
-        benchmark.unpack_revision(ROOT, "no-such-revision")
+    assert compare.unpack_revision(ROOT, "HEAD") == (sha, tree)  # reused
+    with pytest.raises(compare.RevisionError, match="not a revision"):
+        compare.unpack_revision(ROOT, "no-such-revision")
     script = tmp_path / "pinball_benchmark.py"
-    script.write_text(Path(benchmark.__file__).read_text())
+    script.write_text(Path(speed.__file__).read_text())
     # run_worker checks that the worker imported the tree's pinball_env, not the checkout's.
-    figures, error = benchmark.run_worker(script, tree, "cartpole_single", True, 0)
+    figures, error = compare.run_worker(script, tree, "cartpole_single", True, 0)
     assert error is None and figures["cartpole_single_steps_per_second"] > 0
-    figures, error = benchmark.run_worker(script, ROOT, "no_such_figure", True, 0)
+    figures, error = compare.run_worker(script, ROOT, "no_such_figure", True, 0)
     assert figures == {} and "KeyError" in error
 
 
 def test_table_generation_is_timed():
-    figures = benchmark.measure_tablegen(count=1, seed=0)
-    assert set(figures) == set(benchmark.TABLEGEN_FIGURES)
+    figures = speed.measure_tablegen(count=1, seed=0)
+    assert set(figures) == set(speed.TABLEGEN_FIGURES)
     assert all(isinstance(value, float) and value > 0 for value in figures.values()), figures

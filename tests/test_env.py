@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import pinball_env
-from pinball_env.heuristic import HeuristicPolicy
+from pinball_env.players import HeuristicPolicy
 from pinball_env.table import TableError, builtin_tables_dir, load_table
 from pinball_env.tools.demo import main as demo_main
 
@@ -58,7 +58,7 @@ def _headless(monkeypatch):
 
 def test_registration_and_time_limit():
     spec = gym.spec("Pinball-v0")
-    assert spec.entry_point == "pinball_env.env:PinballEnv"
+    assert spec.entry_point == "pinball_env.envs:PinballEnv"
     assert spec.max_episode_steps == pinball_env.MAX_EPISODE_STEPS
     env = gym.make("Pinball-v0")
     assert isinstance(env.action_space, gym.spaces.Discrete) and env.action_space.n == 4

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import pinball_env  # noqa: F401  (registers Pinball-v0 and Pinball-v1)
-from pinball_env.heuristic import HeuristicPolicy, plunger_pulls, skill_shot_frames
 from pinball_env.physics.columns import BOB_X, BOB_Y, CABINET_SHOVE_X
+from pinball_env.players import HeuristicPolicy, plunger_pulls, skill_shot_frames
 from pinball_env.sim.world import World
 from pinball_env.table import BUTTONS, Flipper, Table, load_table
 

@@ -40,9 +40,17 @@ def test_the_table_imports_only_physics_and_itself(path):
             assert module.startswith(("pinball_env.physics", "pinball_env.table")), module
 
 
-# What each floor above the table may import from the package (besides itself), bottom up: the
-# arrows run agents -> wrappers/envs -> observation/game -> sim -> table/procgen -> physics.
-FLOORS = {
+# What each floor may import from the package (besides itself), bottom up: the arrows run
+# agents -> wrappers/envs -> observation/game -> sim -> table/procgen -> physics, with the
+# declarations every floor may use (checks, extras, protocol) beside them, the scripted players
+# and the recording format over the game, and the tools on top of it all. "__init__" is the
+# package itself (its version, its registration of the envs).
+BELOW_TOOLS = {
+    "physics": (),
+    "checks.py": (),
+    "extras.py": (),
+    "protocol.py": (),
+    "table": ("physics",),
     "sim": ("physics", "table", "extras"),
     "procgen": ("physics", "table", "sim"),  # its playability check plays balls on a World
     "render": ("physics", "table", "sim", "extras"),
@@ -51,7 +59,13 @@ FLOORS = {
     "observation.py": ("physics", "table", "sim", "game", "render"),
     "envs": ("physics", "table", "sim", "procgen", "game", "options", "checks", "observation",
              "render"),
+    "__init__.py": ("options", "procgen"),
+    "wrappers": ("envs", "extras"),
+    "players": ("physics", "table", "sim", "game"),
+    "heuristic.py": ("players",),  # the documented import path of the heuristic
+    "recording.py": ("__init__", "table"),
 }  # fmt: skip
+FLOORS = {**BELOW_TOOLS, "tools": ("__init__", *(f.removesuffix(".py") for f in BELOW_TOOLS))}
 
 
 def floor_files(floor: str) -> list[Path]:
@@ -59,14 +73,34 @@ def floor_files(floor: str) -> list[Path]:
     return [path] if path.suffix == ".py" else sorted(path.rglob("*.py"))
 
 
+def test_every_module_of_the_package_is_on_a_floor():
+    placed = {path for floor in FLOORS for path in floor_files(floor)}
+    assert placed == set(PACKAGE.rglob("*.py")), sorted(
+        str(path.relative_to(PACKAGE)) for path in set(PACKAGE.rglob("*.py")) - placed
+    )
+
+
+def package_module(module: str) -> str:
+    """``pinball_env.X`` for a module of the package's floor X, ``pinball_env`` for the package
+    itself (``from pinball_env import __version__``: a name, not a module)."""
+    parts = module.split(".")
+    if len(parts) > 1 and any((PACKAGE / parts[1]).with_suffix(s).exists() for s in (".py", "")):
+        return ".".join(parts[:2])
+    return "pinball_env"
+
+
 @pytest.mark.parametrize("floor", sorted(FLOORS))
 def test_each_floor_imports_only_from_below_it(floor):
     own = floor.removesuffix(".py")
-    allowed = {f"pinball_env.{name}" for name in (own, *FLOORS[floor])}
+    allowed = {
+        "pinball_env" if name == "__init__" else f"pinball_env.{name}"
+        for name in (own, *FLOORS[floor])
+    }
     for path in floor_files(floor):
         for module in imported_modules(path):
+            assert module.split(".")[0] != "agents", f"{path.relative_to(PACKAGE)} imports agents"
             if module.startswith("pinball_env.") or module == "pinball_env":
-                top = ".".join(module.split(".")[:2])
+                top = package_module(module)
                 assert top in allowed, f"{path.relative_to(PACKAGE)} imports {module}"
 
 

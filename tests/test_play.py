@@ -25,6 +25,15 @@ import pytest
 from gymnasium.error import DependencyNotInstalled
 
 import pinball_env
+from pinball_env.recording import (
+    GameRecord,
+    RecordingError,
+    decode_actions,
+    load_recording,
+    parse_recording,
+    table_sha256,
+    write_recording,
+)
 from pinball_env.table import load_table
 from pinball_env.tools import play
 
@@ -205,7 +214,7 @@ def test_a_game_over_waits_for_a_new_game(loop):
 
 
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory) -> tuple[Path, tuple[play.GameRecord, ...]]:
+def recorded(tmp_path_factory) -> tuple[Path, tuple[GameRecord, ...]]:
     """A recording of two games: one to game over with both flippers worked, then a restart,
     one that the player quits."""
     path = tmp_path_factory.mktemp("play") / "games.json"
@@ -234,12 +243,12 @@ def test_a_recording_holds_the_games_and_the_env(recorded):
     first = data["games"][0]["actions"]
     assert first[:30] == "1" * 30 and first[60:70] == "3" * 10 and first[70:90] == "2" * 20
     assert data["games"][1]["actions"] == "0" + "2" * 39
-    assert play.load_recording(path).games == games
+    assert load_recording(path).games == games
 
 
 def test_replay_gives_the_recorded_scores(recorded, capsys):
     path, games = recorded
-    recording = play.load_recording(path)
+    recording = load_recording(path)
     assert play.replay(recording) == [game.score for game in games]
     assert play.main(["--replay", str(path), "--headless"]) == [game.score for game in games]
     assert "as recorded" in capsys.readouterr().out
@@ -247,7 +256,7 @@ def test_replay_gives_the_recorded_scores(recorded, capsys):
 
 def test_replay_in_a_window_and_stopping_it(recorded):
     path, games = recorded
-    recording = play.load_recording(path)
+    recording = load_recording(path)
     assert play.replay(recording, window=True, fps=0) == [game.score for game in games]
     with pytest.raises(play.ReplayStopped, match="game 1"):
         play.replay(recording, window=True, fps=0, events=scripted({3: [down(pygame.K_q)]}))
@@ -308,8 +317,8 @@ def _delete(key: str) -> Callable[[dict[str, Any]], None]:
 def test_a_bad_recording_is_refused_naming_the_problem(recorded, tmp_path, edit, message):
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(edited(recorded, edit)))
-    with pytest.raises(play.RecordingError, match=message):
-        play.load_recording(path)
+    with pytest.raises(RecordingError, match=message):
+        load_recording(path)
     with pytest.raises(SystemExit, match="refused: .*" + message):
         play.main(["--replay", str(path), "--headless"])
 
@@ -321,8 +330,8 @@ def test_a_bad_recording_is_refused_naming_the_problem(recorded, tmp_path, edit,
 def test_a_file_that_is_not_a_recording_is_refused(tmp_path, text, message):
     path = tmp_path / "bad.json"
     path.write_text(text)
-    with pytest.raises(play.RecordingError, match=message):
-        play.load_recording(path)
+    with pytest.raises(RecordingError, match=message):
+        load_recording(path)
 
 
 @pytest.mark.parametrize(
@@ -336,22 +345,22 @@ def test_a_file_that_is_not_a_recording_is_refused(tmp_path, text, message):
     ],
 )
 def test_a_replay_that_differs_from_its_recording_is_refused(recorded, edit, message):
-    recording = play.parse_recording(edited(recorded, edit))
-    with pytest.raises(play.RecordingError, match=message):
+    recording = parse_recording(edited(recorded, edit))
+    with pytest.raises(RecordingError, match=message):
         play.replay(recording)
 
 
 def test_a_replay_that_ends_before_its_actions_is_refused(recorded):
     # Steps after the game over: the recording cannot be of this game.
     data = edited(recorded, lambda d: d["games"][0].update(actions=d["games"][0]["actions"] + "0"))
-    with pytest.raises(play.RecordingError, match=r"the replay ended \(game over\) at step"):
-        play.replay(play.parse_recording(data))
+    with pytest.raises(RecordingError, match=r"the replay ended \(game over\) at step"):
+        play.replay(parse_recording(data))
 
 
 def test_a_written_recording_loads_back_equal(tmp_path, recorded):
-    recording = play.load_recording(recorded[0])
-    play.write_recording(tmp_path / "sub" / "copy.json", recording)
-    assert play.load_recording(tmp_path / "sub" / "copy.json") == recording
+    recording = load_recording(recorded[0])
+    write_recording(tmp_path / "sub" / "copy.json", recording)
+    assert load_recording(tmp_path / "sub" / "copy.json") == recording
 
 
 # --- without pygame -------------------------------------------------------------------------
@@ -519,7 +528,7 @@ def test_the_play_tool_plays_only_pinball_envs():
 
 
 @pytest.fixture(scope="module")
-def cabinet_recorded(tmp_path_factory) -> tuple[Path, tuple[play.GameRecord, ...]]:
+def cabinet_recorded(tmp_path_factory) -> tuple[Path, tuple[GameRecord, ...]]:
     """A recording of two Pinball-v1 games: a plunge, nudges and flips, a restart, then one that
     the player quits."""
     path = tmp_path_factory.mktemp("play") / "cabinet.json"
@@ -552,28 +561,28 @@ def test_a_cabinet_recording_holds_the_actions_in_base_32(cabinet_recorded):
     assert first[:50] == "4" * 50 and first[60:62] == "88" and first[70:75] == "s" * 5
     assert first[90:120] == "3" * 30 and len(first) == 150
     assert data["games"][1]["actions"] == "0" + "g" * 29  # NUDGE_RIGHT (16) held
-    assert play.decode_actions("0s3g") == [0, 28, 3, 16]
-    assert play.load_recording(path).games == games
+    assert decode_actions("0s3g") == [0, 28, 3, 16]
+    assert load_recording(path).games == games
 
 
 def test_a_cabinet_recording_replays(cabinet_recorded, capsys):
     path, games = cabinet_recorded
-    recording = play.load_recording(path)
+    recording = load_recording(path)
     assert play.replay(recording) == [game.score for game in games]
     assert play.replay(recording, window=True, fps=0) == [game.score for game in games]
     assert play.main(["--replay", str(path), "--headless"]) == [game.score for game in games]
     assert "as recorded" in capsys.readouterr().out
-    play.write_recording(path.with_name("copy.json"), recording)
+    write_recording(path.with_name("copy.json"), recording)
     assert path.with_name("copy.json").read_text() == path.read_text()
 
 
 def test_a_cabinet_recording_on_a_table_without_the_cabinet_is_refused(cabinet_recorded):
     def to_classic(data: dict[str, Any]) -> None:
         data["env_id"], data["options"]["table"] = "Pinball-v0", "classic"
-        data["table_sha256"] = play.table_sha256(load_table("classic"))
+        data["table_sha256"] = table_sha256(load_table("classic"))
 
-    recording = play.parse_recording(edited(cabinet_recorded, to_classic))
-    with pytest.raises(play.RecordingError, match=r"'4' at step 0 is action 4, but the table "):
+    recording = parse_recording(edited(cabinet_recorded, to_classic))
+    with pytest.raises(RecordingError, match=r"'4' at step 0 is action 4, but the table "):
         play.replay(recording)
 
 
@@ -602,9 +611,9 @@ RECORDING_BEFORE_THE_CABINET = {
 def test_a_recording_from_before_the_cabinet_replays_and_writes_back_the_same(tmp_path):
     text = json.dumps(RECORDING_BEFORE_THE_CABINET, indent=2) + "\n"  # as that tool wrote it
     (tmp_path / "old.json").write_text(text)
-    recording = play.load_recording(tmp_path / "old.json")
+    recording = load_recording(tmp_path / "old.json")
     assert recording.version == 1 and play.replay(recording) == [530]
-    play.write_recording(tmp_path / "again.json", recording)
+    write_recording(tmp_path / "again.json", recording)
     assert (tmp_path / "again.json").read_text() == text
 
 

@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 import pinball_env  # noqa: F401  (registers Pinball-v1 and -v2)
-from pinball_env.heuristic import HeuristicPolicy
 from pinball_env.physics.cabinet import cabinet_substep
 from pinball_env.physics.columns import (
     BOB_TOUCHES,
@@ -22,6 +21,7 @@ from pinball_env.physics.columns import (
     CABINET_SHOVE_X,
     CABINET_STATE_SIZE,
 )
+from pinball_env.players import HeuristicPolicy
 from pinball_env.table import load_table
 from pinball_env.tools.tilt import EVERY, NUDGES, heuristic_games, pattern_times
 

@@ -1,16 +1,17 @@
-"""The runnable modules: benchmark and table drawing (smoke runs with tiny budgets)."""
+"""The runnable modules: the speed benchmark and table drawing (smoke runs with tiny budgets)."""
 
 import importlib.util
 import json
 
 import pytest
 
-from pinball_env.tools import benchmark, plot, tilt
+from benchmarks import speed
+from pinball_env.tools import plot, tilt
 
 
 def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
     out = tmp_path / "bench.json"
-    result = benchmark.main(["--quick", "--json", str(out)])
+    result = speed.main(["--quick", "--json", str(out)])
     saved = json.loads(out.read_text())
     for key in (
         "single_swept_steps_per_second",
@@ -29,12 +30,12 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "sb3_ppo_env_steps_per_second",
         "sb3_ppo_env_share",
         "sb3_ppo_learner_share",
-        *(f"{prefix}_env_steps_per_second" for prefix in benchmark.SB3_CONFIGS),
+        *(f"{prefix}_env_steps_per_second" for prefix in speed.SB3_CONFIGS),
         "v1_sb3chain1024_2thread_steps_per_second",
         "ratio_v1_sb3chain1024_2thread_to_v1_native1024_2thread",
     ):
         assert saved[key] == result[key] > 0, key
-    for prefix in benchmark.SB3_CONFIGS:
+    for prefix in speed.SB3_CONFIGS:
         shares = saved[f"{prefix}_env_share"] + saved[f"{prefix}_learner_share"]
         assert shares == pytest.approx(1.0)
     assert "compare" not in saved
@@ -42,13 +43,13 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
 
 
 def test_benchmark_measures_only_what_it_is_asked(capsys):
-    result = benchmark.main(["--quick", "--only", "kernel", "v1_sb3chain1024_2thread"])
+    result = speed.main(["--quick", "--only", "kernel", "v1_sb3chain1024_2thread"])
     measured = {key for key, value in result.items() if value is not None}
     assert "kernel_ns_per_ball_element_test" in measured
     assert "v1_sb3chain1024_2thread_steps_per_second" in measured
     assert "single_swept_steps_per_second" not in result
     with pytest.raises(SystemExit):
-        benchmark.main(["--quick", "--only", "no_such_measurement"])
+        speed.main(["--quick", "--only", "no_such_measurement"])
     assert "no measurement no_such_measurement (there are: " in capsys.readouterr().err
 
 
@@ -80,5 +81,8 @@ def test_draw_shows_the_cabinet_at_work(tmp_path):
 
 
 def test_the_tools_run_as_modules_of_pinball_env_tools():
-    for name in ("demo", "plot", "crosscheck", "benchmark", "tilt"):
+    for name in ("demo", "plot", "crosscheck", "play", "tilt"):
         assert importlib.util.find_spec(f"pinball_env.tools.{name}") is not None, name
+    # The speed benchmark is a developer's tool of the checkout, not a module of the package.
+    assert importlib.util.find_spec("pinball_env.tools.benchmark") is None
+    assert importlib.util.find_spec("benchmarks.speed") is not None

@@ -13,7 +13,7 @@ from gymnasium.vector import AsyncVectorEnv, AutoresetMode, SyncVectorEnv, Vecto
 from packaging.version import Version
 
 import pinball_env  # noqa: F401  (registers the envs)
-from pinball_env.vector_env import PinballVectorEnv
+from pinball_env.envs import PinballVectorEnv
 
 # Short games: one ball, three frames a step, and a time limit, so that episodes end (both ways)
 # within a few hundred steps. Procgen plays two layouts (tables are cached for the session).

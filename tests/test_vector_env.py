@@ -6,7 +6,7 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 import pinball_env  # noqa: F401  (registers Pinball-v0)
-from pinball_env.vector_env import PinballVectorEnv
+from pinball_env.envs import PinballVectorEnv
 
 INFO_KEYS = ("ball_position", "ball_velocity", "score", "balls_left", "points", "drained", "frames")
 

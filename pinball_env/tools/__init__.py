@@ -3,5 +3,8 @@
 - ``demo``: the scripted heuristic plays (a window, or headless with a PNG of the last frame);
 - ``plot``: matplotlib pictures of a table and a ball's path on it;
 - ``crosscheck``: the swept physics against pymunk, scenario by scenario, with a report;
-- ``benchmark``: speed of the world step and of the env, as a table and JSON.
+- ``play``: the keyboard in a window, recordings and their replays;
+- ``tilt``: what nudging patterns trip Pinball-v1's and -v2's tilt.
+
+The speed benchmark is a developer's tool of the checkout: ``python -m benchmarks.speed``.
 """

@@ -1,7 +1,7 @@
 """Watch the scripted heuristic play: ``python -m pinball_env.tools.demo``.
 
 Opens a pygame window (the ``render`` extra) and plays games of ``Pinball-v0`` with
-:class:`~pinball_env.heuristic.HeuristicPolicy`, printing each game's score. Without a display
+:class:`~pinball_env.players.HeuristicPolicy`, printing each game's score. Without a display
 (or with ``--headless``) it plays off-screen and saves the last frame as a PNG (matplotlib, the
 ``plot`` extra). What it needs is checked before a game is played.
 """
@@ -16,7 +16,7 @@ import numpy as np
 
 from pinball_env import MAX_EPISODE_STEPS  # importing the package registers Pinball-v0
 from pinball_env.extras import MissingDependency, require
-from pinball_env.heuristic import HeuristicPolicy
+from pinball_env.players import HeuristicPolicy
 
 
 def has_display() -> bool:

@@ -171,7 +171,7 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
     if table.rules is None:
         raise ValueError(f"table {table.name!r} has no rules")
     from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
-    from pinball_env.heuristic import HeuristicPolicy
+    from pinball_env.players import HeuristicPolicy
 
     plt = _pyplot()
     env = PinballEnv(table=table, render_mode="rgb_array")

@@ -16,7 +16,7 @@ from typing import Any
 import gymnasium as gym
 
 from pinball_env.game.actions import action_meanings
-from pinball_env.heuristic import HeuristicPolicy
+from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import EVAL_SEEDS, GAME_OPTIONS, REPEAT_ACTION_PROBABILITY
 
 MEANINGS = action_meanings(cabinet=True)

@@ -17,8 +17,8 @@ import numba
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from pinball_env.envs import PinballVectorEnv
 from pinball_env.extras import require
-from pinball_env.vector_env import PinballVectorEnv
 
 require("stable_baselines3")
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize  # noqa: E402

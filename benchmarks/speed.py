@@ -1,7 +1,8 @@
 """Speed of the envs, the kernel, and references of this machine, in one run:
-``python -m pinball_env.tools.benchmark`` (``--quick`` for a short run, ``--json PATH``,
-``--compare REV`` for the same figures of a git revision, measured alternately in the same run,
-``--only NAME ...`` for some of the measurements).
+``python -m benchmarks.speed`` from the repository root (``--quick`` for a short run, ``--json
+PATH``, ``--compare REV`` for the same figures of a git revision, measured alternately in the
+same run, ``--only NAME ...`` for some of the measurements). A developer's tool of the
+checkout, not shipped in the wheel: it trains with ``agents`` beside the package.
 
 Measures, with uniformly random actions on the classic table (state observations unless said):
 
@@ -45,13 +46,14 @@ and the ratios between them, as a table and a JSON line. A figure this version c
 (no stable-baselines3, an env or option an older revision lacks) is null. Timings are
 wall-clock on a shared machine: compare figures of one run, never across runs.
 
-``--compare REV`` measures every figure for the checkout (the package this module belongs to)
-and for git revision REV (``git archive``'d once into ``~/.cache/pinball-benchmark/SHA``), each
-measurement in a fresh process running this module's code against that tree's package, the
-two alternating measurement by measurement (``--repeats N``: N of each, the median kept). The
-table gains REV's column and the ratio checkout / REV (above 1: the checkout's rate is higher,
-or its time longer); the JSON gains ``"compare": {"rev", "sha", "repeats", "figures",
-"ratios", "errors"}``.
+``--compare REV`` (:mod:`benchmarks.compare`) measures every figure for the checkout and for git
+revision REV, each measurement in a fresh process running this module's code against that
+tree's package, the two alternating measurement by measurement (``--repeats N``: N of each, the
+median kept). The table gains REV's column and the ratio checkout / REV (above 1: the
+checkout's rate is higher, or its time longer); the JSON gains ``"compare": {"rev", "sha",
+"repeats", "figures", "ratios", "errors"}``. So that a copy of this file measures any tree, it
+imports nothing of ``benchmarks/`` but for ``--compare``, and only what every revision's
+``pinball_env`` has.
 """
 
 import argparse
@@ -60,9 +62,6 @@ import json
 import math
 import os
 import platform
-import re
-import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -80,8 +79,8 @@ from pinball_env.table import load_table
 
 try:
     from pinball_env.sim.world import World
-except ImportError:  # an older revision's package (--compare): World's home was pinball_env.world
-    from pinball_env.world import World
+except ImportError:  # a revision from before sim/ (--compare): World's home was pinball_env.world
+    from pinball_env.world import World  # type: ignore[no-redef]
 
 STARTUP = (
     "import time; start = time.perf_counter(); import gymnasium as gym, pinball_env; "
@@ -123,17 +122,7 @@ TABLEGEN_FIGURES = ("tablegen_ms_per_table", "tablegen_targets_ms_per_table")
 # Generated tables' seeds start here (plus 1000 per --seed): seeds no test or config uses.
 TABLEGEN_SEED = 7_000_000
 
-# What --compare unpacks of a revision (those it has), and where.
-ARCHIVED = ("pinball_env", "agents", "configs")
-CACHE_ENV = "PINBALL_BENCHMARK_CACHE"  # overrides the cache folder
-
 Figures = dict[str, float | None]
-
-ANSI = re.compile(r"\x1b\[[0-9;]*m")  # the colours of numba's error messages
-
-
-class RevisionError(ValueError):
-    """``--compare``'s revision is not one of the checkout's repository."""
 
 
 def random_launches(world: World, rng: np.random.Generator, max_speed: float) -> None:
@@ -196,38 +185,16 @@ def measure_tablegen(count: int, seed: int) -> Figures:
     return result
 
 
-def measure_sb3(prefix: str, iterations: int) -> Figures:
-    """stable-baselines3 training with the config ``SB3_CONFIGS[prefix]`` (beside this
-    package), set up as ``agents.train`` does it (``load_config``, ``set_threads``: torch's
-    threads are the config's; ``make_env`` as training's chain; the algorithm with
-    ``sb3_hyperparams``; no warm start, validation or checkpoints); one iteration (on-policy:
-    a rollout and its update; off-policy: 128 vector steps and their gradient steps) untimed,
-    after off-policy's ``learning_starts``, then ``iterations`` timed. Returns
-    ``PREFIX_env_steps_per_second`` of the timed ``learn`` call (wall time),
-    ``PREFIX_env_share`` of it inside the VecEnv's ``step_async``, ``step_wait`` and ``reset``
-    (the whole chain SB3 steps, ``VecNormalize`` included), and the rest,
-    ``PREFIX_learner_share``. Null without torch and stable-baselines3, or without the config
-    (an older revision)."""
-    names = [f"{prefix}_{figure}" for figure in SB3_FIGURES]
-    root = Path(pinball_env.__file__).resolve().parent.parent
-    if not (root / SB3_CONFIGS[prefix]).is_file():
-        return dict.fromkeys(names)
-    try:
-        import stable_baselines3  # noqa: F401
-        import torch  # noqa: F401
-    except ImportError:
-        return dict.fromkeys(names)
-    if str(root) not in sys.path:  # the agents package beside pinball_env
-        sys.path.insert(0, str(root))
+def sb3_model(config_path: Path) -> tuple[Any, Any]:
+    """The stable-baselines3 model of the config at ``config_path`` and its VecEnv, set up as
+    ``agents.train`` does it (``load_config``, ``set_threads``: torch's threads are the
+    config's; ``make_env``, training's chain; the algorithm with ``sb3_hyperparams``; no warm
+    start, validation or checkpoints). ``agents`` is the tree's, beside its ``pinball_env``."""
     from agents.config import algorithm_class, load_config, sb3_hyperparams
+    from agents.envs import make_env
     from agents.train import set_threads
 
-    try:
-        from agents.envs import make_env
-    except ImportError:  # an older revision (--compare): make_env was in agents.common
-        from agents.common import make_env
-
-    config = load_config(root / SB3_CONFIGS[prefix])
+    config = load_config(config_path)
     set_threads(config)
     # Training's chain: infos only where a game ended (older revisions filled every env's).
     quiet = {"step_infos": False} if "step_infos" in inspect.signature(make_env).parameters else {}
@@ -236,6 +203,29 @@ def measure_sb3(prefix: str, iterations: int) -> Figures:
         config.policy, venv, seed=config.seed, device=config.device, verbose=0,
         **sb3_hyperparams(config),
     )  # fmt: skip
+    return model, venv
+
+
+def measure_sb3(prefix: str, iterations: int) -> Figures:
+    """stable-baselines3 training with the config ``SB3_CONFIGS[prefix]`` (beside the
+    package, :func:`sb3_model`); one iteration (on-policy:
+    a rollout and its update; off-policy: 128 vector steps and their gradient steps) untimed,
+    after off-policy's ``learning_starts``, then ``iterations`` timed. Returns
+    ``PREFIX_env_steps_per_second`` of the timed ``learn`` call (wall time),
+    ``PREFIX_env_share`` of it inside the VecEnv's ``step_async``, ``step_wait`` and ``reset``
+    (the whole chain SB3 steps, ``VecNormalize`` included), and the rest,
+    ``PREFIX_learner_share``. Null without torch and stable-baselines3, or without the config
+    (an older revision)."""
+    names = [f"{prefix}_{figure}" for figure in SB3_FIGURES]
+    root = Path(pinball_env.__file__).resolve().parent.parent  # the tree: configs/, agents/
+    if not (root / SB3_CONFIGS[prefix]).is_file():
+        return dict.fromkeys(names)
+    try:
+        import stable_baselines3  # noqa: F401
+        import torch  # noqa: F401
+    except ImportError:
+        return dict.fromkeys(names)
+    model, venv = sb3_model(root / SB3_CONFIGS[prefix])
     if hasattr(model, "n_steps"):  # on-policy: an iteration is a rollout and its update
         rollout = model.n_steps * model.n_envs
         warmup = rollout
@@ -486,137 +476,6 @@ def worker(name: str, quick: bool, seed: int, out: Path) -> dict:
     return report
 
 
-def git(repo: Path, *args: str) -> str:
-    """The output of ``git -C repo ARGS``, stripped."""
-    return subprocess.run(
-        ["git", "-C", str(repo), *args], check=True, capture_output=True, text=True
-    ).stdout.strip()
-
-
-def cache_folder() -> Path:
-    """Where ``--compare`` keeps unpacked revisions: ``$PINBALL_BENCHMARK_CACHE``, else
-    ``~/.cache/pinball-benchmark`` (or under ``$XDG_CACHE_HOME``)."""
-    if os.environ.get(CACHE_ENV):
-        return Path(os.environ[CACHE_ENV])
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pinball-benchmark"
-
-
-def unpack_revision(repo: Path, rev: str) -> tuple[str, Path]:
-    """The full sha of ``rev`` and a folder holding its ``ARCHIVED`` paths (``git archive``),
-    made once per sha under :func:`cache_folder` and reused."""
-    try:
-        sha = git(repo, "rev-parse", "--verify", f"{rev}^{{commit}}")
-    except subprocess.CalledProcessError as error:
-        raise RevisionError(f"{rev}: not a revision of {repo}: {error.stderr.strip()}") from None
-    cache = cache_folder()
-    tree = cache / sha
-    if (tree / "pinball_env" / "__init__.py").is_file():
-        return sha, tree
-    cache.mkdir(parents=True, exist_ok=True)
-    present = set(git(repo, "ls-tree", "--name-only", sha).split())
-    archive = subprocess.run(
-        ["git", "-C", str(repo), "archive", "--format=tar", sha,
-         *[path for path in ARCHIVED if path in present]],
-        check=True, capture_output=True,
-    ).stdout  # fmt: skip
-    partial = Path(tempfile.mkdtemp(prefix=f".{sha}-", dir=cache))
-    subprocess.run(["tar", "-x", "-C", str(partial)], input=archive, check=True)
-    try:
-        partial.rename(tree)  # whole or not at all
-    except OSError:  # another run unpacked it meanwhile
-        shutil.rmtree(partial)
-    return sha, tree
-
-
-# A worker's start: without an editable install's import hooks, which would serve a module that
-# the tree lacks (an old revision's) from the checkout, and mix the two.
-WORKER_BOOT = (
-    "import runpy, sys; "
-    "sys.meta_path[:] = [f for f in sys.meta_path "
-    "if not getattr(f, '__module__', '').startswith('__editable__')]; "
-    "sys.path[:] = [p for p in sys.path if not p.startswith('__editable__')]; "
-    "sys.argv = sys.argv[1:]; runpy.run_path(sys.argv[0], run_name='__main__')"
-)
-
-
-def run_worker(
-    script: Path, tree: Path, name: str, quick: bool, seed: int
-) -> tuple[Figures, str | None]:
-    """Measure ``name`` in a fresh process: ``script`` (this module's code) run with ``tree``
-    first on ``PYTHONPATH`` and as the working folder, so that ``pinball_env`` (and ``agents``)
-    are that tree's. Returns the figures and the error (None if none)."""
-    environment = dict(os.environ)
-    environment["PYTHONPATH"] = os.pathsep.join(
-        filter(None, [str(tree), environment.get("PYTHONPATH")])
-    )
-    with tempfile.TemporaryDirectory() as folder:
-        out = Path(folder) / "figures.json"
-        command = [sys.executable, "-c", WORKER_BOOT, str(script), "--worker", name,
-                   "--json-out", str(out), "--seed", str(seed),
-                   *(["--quick"] if quick else [])]  # fmt: skip
-        done = subprocess.run(command, cwd=tree, env=environment, capture_output=True, text=True)
-        if done.returncode != 0 or not out.is_file():
-            tail = (done.stderr.strip().splitlines() or ["no output"])[-1]
-            return {}, f"exit status {done.returncode}: {tail}"
-        report = json.loads(out.read_text())
-    expected = (tree / "pinball_env").resolve()
-    if Path(report["package"]) != expected:
-        raise RuntimeError(f"{name}: the worker imported {report['package']}, not {expected}")
-    return report["figures"], report["error"]
-
-
-def median(values: list[float | None]) -> float | None:
-    """The median of the values measured (None if none was)."""
-    measured = [value for value in values if value is not None]
-    return statistics.median(measured) if measured else None
-
-
-def compare(
-    rev: str, quick: bool = False, seed: int = 0, repeats: int = 1, only: list[str] | None = None
-) -> dict:
-    """Every figure for the checkout and for ``rev``, each measurement in a fresh process per
-    tree, the two alternating (which goes first alternates too), ``repeats`` times each, the
-    median kept: :func:`finish`'s dict of the checkout with ``"compare"`` added."""
-    checkout = Path(pinball_env.__file__).resolve().parent.parent
-    sha, tree = unpack_revision(checkout, rev)
-    names = [name for name, _ in selected(quick, seed, only)]
-    trees = {"checkout": checkout, "rev": tree}
-    values: dict[str, dict[str, list[float | None]]] = {"checkout": {}, "rev": {}}
-    keys: dict[str, None] = {}  # the figures in the order measured, either tree's
-    errors: dict[str, dict[str, str]] = {"checkout": {}, "rev": {}}
-    total = len(names) * repeats * 2
-    with tempfile.TemporaryDirectory() as folder:
-        script = Path(folder) / "pinball_benchmark.py"  # this code, whichever package it meets
-        shutil.copyfile(__file__, script)
-        done = 0
-        for repeat in range(repeats):
-            for index, name in enumerate(names):
-                order = ("checkout", "rev") if (index + repeat) % 2 == 0 else ("rev", "checkout")
-                for side in order:
-                    progress(done, total, f"{name} ({side})")
-                    figures, error = run_worker(script, trees[side], name, quick, seed)
-                    if error is not None:
-                        errors[side][name] = ANSI.sub("", error).strip()
-                    for key, value in figures.items():
-                        keys[key] = None
-                        values[side].setdefault(key, []).append(value)
-                    done += 1
-    progress(total, total, "done")
-    print(file=sys.stderr)
-    ours = finish({key: median(values["checkout"].get(key, [])) for key in keys}, quick)
-    theirs = finish({key: median(values["rev"].get(key, [])) for key in keys}, quick)
-    del theirs["machine"], theirs["quick"]
-    ours["compare"] = {
-        "rev": rev,
-        "sha": sha,
-        "repeats": repeats,
-        "figures": theirs,
-        "ratios": {key: divide(ours[key], theirs[key]) for key in theirs},
-        "errors": errors,
-    }
-    return ours
-
-
 def shown(value: object) -> str:
     """A figure as the table prints it."""
     if value is None:
@@ -688,6 +547,9 @@ def main(argv: list[str] | None = None) -> dict:
     except ValueError as error:
         command.error(f"--only: {error}")
     if args.compare is not None:
+        # Imported here: a worker (a copy of this file, run against another tree) never is one.
+        from benchmarks.compare import RevisionError, compare
+
         try:
             result = compare(args.compare, args.quick, args.seed, args.repeats, args.only)
         except RevisionError as error:

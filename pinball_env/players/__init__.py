@@ -1,0 +1,11 @@
+"""The scripted players: programs that play the env through its public interface (its ``info``
+and action space), used alike by the tools (``python -m pinball_env.tools.demo``) and the
+agents (the ``heuristic`` baseline, the warm start's teacher).
+
+- :class:`HeuristicPolicy`: flips timed from the ball's predicted touch, catch and aim; on a
+  table with the cabinet, the skill shot and nudges for outlane balls.
+"""
+
+from pinball_env.players.heuristic import HeuristicPolicy, plunger_pulls, skill_shot_frames
+
+__all__ = ["HeuristicPolicy", "plunger_pulls", "skill_shot_frames"]

@@ -1,0 +1,5 @@
+"""``python -m pinball_env.tools.crosscheck``: see :mod:`.cli`."""
+
+from pinball_env.tools.crosscheck.cli import main
+
+main()
