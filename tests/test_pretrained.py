@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 
 from agents.config import ConfigError
+from agents.evaluation import evaluate_protocol, player_for
 from agents.policy import PRETRAINED, load_policy, pretrained_card
-from agents.report import evaluate
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -22,8 +22,8 @@ def test_a_pretrained_agent_scores_as_its_card_says(name, tmp_path):
     policy = load_policy(f"pretrained:{name}")
     assert policy.env_id == card["env_id"] and policy.config.seed == card["seed"]
     games = card["check_games"]
-    summary = evaluate(model_path=f"pretrained:{name}", episodes=len(games["seeds"]),
-                       protocol=True, out=tmp_path)  # fmt: skip
+    player = player_for(model_path=f"pretrained:{name}")
+    summary = evaluate_protocol(player, tmp_path, episodes=len(games["seeds"]))
     assert summary["seeds"] == [games["seeds"][0], games["seeds"][-1]]
     scores = [int(line.split(",")[1]) for line in
               (tmp_path / "episodes.csv").read_text().splitlines()[1:]]  # fmt: skip

@@ -18,7 +18,7 @@ from typing import Any
 
 from agents.benchmark.methods import CONFIGS, METHODS, SCALED_BY_BUDGET, TINY_FRAMES, trained_by
 from agents.config import ConfigError, TrainConfig, config_from_dict, load_config, load_run_config
-from agents.report import PROTOCOL_EVAL, evaluate
+from agents.evaluation import PROTOCOL_EVAL, evaluate_protocol, player_for
 from agents.runs import MODEL_FILE, latest_checkpoint, source_commit
 from pinball_env import protocol
 
@@ -136,7 +136,7 @@ def _evaluate_job(folder: Path, settings: Settings, out: Path, **agent: Any) -> 
     """Play the protocol's games with ``agent`` (evaluate's policy/env or model_path) into
     ``out``, timed in the job's record."""
     started = time.monotonic()
-    evaluate(episodes=settings.episodes, out=out, protocol=True, **agent)
+    evaluate_protocol(player_for(**agent), out, settings.episodes)
     _log_job(folder, evaluate_seconds=time.monotonic() - started)
 
 

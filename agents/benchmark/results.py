@@ -15,7 +15,7 @@ from agents.benchmark.methods import METHODS, TINY_FRAMES, config_digest
 from agents.benchmark.plots import plot_benchmark
 from agents.benchmark.tables import markdown_table
 from agents.config import ConfigError, load_run_config
-from agents.report import PROTOCOL_EVAL
+from agents.evaluation import PROTOCOL_EVAL
 from agents.runs import (
     MODEL_FILE,
     best_validation,
