@@ -33,7 +33,7 @@ from typing import Any
 
 from agents.cli import run_training, training_parser
 from agents.config import ConfigError, TrainConfig, algorithm_class, sb3_hyperparams
-from agents.envs import make_env
+from agents.envs import make_env_chain
 from agents.imitation import Anchor, imitate
 from agents.runs import (
     BEST_MODEL,
@@ -145,7 +145,7 @@ def _model(
     stats = stats_for(checkpoint[1]) if checkpoint else None
     if checkpoint and config.env.normalize and stats is None:
         raise ConfigError(f"{checkpoint[1]}: its VecNormalize statistics are missing")
-    venv = make_env(config, stats=stats, step_infos=False)
+    venv = make_env_chain(config, stats=stats, step_infos=False)
     if checkpoint is None:
         try:
             model = algorithm(

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.config import TrainConfig
-from agents.envs import make_env
+from agents.envs import make_env_chain
 from agents.rollouts import model_policy, rollouts, summarize
 from agents.runs import (
     BEST_MODEL,
@@ -45,7 +45,7 @@ class Validation:
         """Validate ``model`` (``frames`` played in training so far); returns its row."""
         games = self.config.validation_seeds
         if self.venv is None:
-            self.venv = make_env(self.config, num_envs=len(games), seed=games.start)
+            self.venv = make_env_chain(self.config, num_envs=len(games), seed=games.start)
         if hasattr(self.venv, "obs_rms"):
             self.venv.obs_rms = copy.deepcopy(model.get_env().obs_rms)
             self.venv.training = False  # (before the reset, which would update them)

@@ -15,7 +15,7 @@ import yaml
 
 from agents import evaluate, train
 from agents.config import ConfigError, load_config, sb3_hyperparams
-from agents.envs import make_env
+from agents.envs import make_env_chain
 from agents.imitation import discounted_returns, imitate, teacher_games
 from agents.policy import load_policy
 from agents.runs import atomic_write, latest_checkpoint, save_model
@@ -419,7 +419,7 @@ def test_validation_keeps_the_best_model_and_goes_on_after_a_resume(tmp_path, ca
     assert f"at {best['steps']} steps" in capsys.readouterr().out
     # The model replays its validation games through its saved chain, to the same scores.
     trained = load_policy(run)
-    venv = make_env(trained.config, num_envs=3, seed=300_000, frozen=trained.normalization)
+    venv = make_env_chain(trained.config, num_envs=3, seed=300_000, frozen=trained.normalization)
     replayed = evaluate.rollouts(
         venv, evaluate.model_policy(trained.model), [300_000, 300_001, 300_002]
     )
@@ -475,10 +475,10 @@ def test_the_warm_start_fits_the_heuristic_and_counts_in_the_budget(tmp_path):
 
     config = load_config(ROOT / "configs/agents/ppo.yaml",
                          ["env.num_envs=8", "env.kwargs.frame_skip=1"])  # fmt: skip
-    venv = make_env(config)
+    venv = make_env_chain(config)
     model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
     fit = imitate(model, venv, steps=8000, epochs=5, seed=0)
-    games = teacher_games(make_env(config), 1000)
+    games = teacher_games(make_env_chain(config), 1000)
     majority = np.bincount(games["actions"].ravel()).max() / games["actions"].size
     assert fit["steps"] == 8000 and fit["frames"] > fit["steps"]  # skip_above runs frames on
     assert fit["accuracy"] > majority + 0.03  # more than always pressing the usual buttons
@@ -497,7 +497,7 @@ def test_the_warm_start_fits_at_its_own_learning_rate():
     config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])  # (512 a batch)
     moves = []
     for learning_rate in (None, 1e-30):  # the algorithm's 3e-4, and a rate that moves nothing
-        venv = make_env(config)
+        venv = make_env_chain(config)
         model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
         before = [p.detach().clone() for p in model.policy.parameters()]
         imitate(model, venv, steps=256, epochs=1, seed=0, learning_rate=learning_rate)
@@ -516,7 +516,7 @@ def test_the_anchor_pulls_a_drifted_policy_back_to_its_warm_start():
     from agents.imitation import Anchor
 
     config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])
-    venv = make_env(config)
+    venv = make_env_chain(config)
     model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
     anchor = Anchor(model.policy, coef=1.0, batch_size=64, seed=0)
     frozen = [p.detach().clone() for p in anchor.reference.parameters()]

@@ -170,7 +170,9 @@ def test_the_policy_sees_observations_as_training_normalised_them(tmp_path, no_r
 
 
 def test_each_env_runner_plays_its_own_block_of_seeds():
-    env = rllib.make_env({"id": "Pinball-v0", "seed": 10, "num_envs": 4, "max_episode_steps": None})
+    env = rllib.make_rllib_env(
+        {"id": "Pinball-v0", "seed": 10, "num_envs": 4, "max_episode_steps": None}
+    )
     assert type(env.unwrapped).__name__ == "PinballVectorEnv"  # the native vector env
     seen = []
     reset = env.env.reset

@@ -223,9 +223,12 @@ def measure_sb3(prefix: str, iterations: int) -> Figures:
     from agents.train import set_threads
 
     try:
-        from agents.envs import make_env
-    except ImportError:  # an older revision (--compare): make_env was in agents.common
-        from agents.common import make_env
+        from agents.envs import make_env_chain as make_env
+    except ImportError:  # an older revision (--compare): agents.envs.make_env, or agents.common's
+        try:
+            from agents.envs import make_env
+        except ImportError:
+            from agents.common import make_env
 
     config = load_config(root / SB3_CONFIGS[prefix])
     set_threads(config)
