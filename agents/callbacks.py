@@ -21,7 +21,7 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
 from agents.config import TrainConfig
 from agents.envs import FrameCounter
-from agents.imitation import Anchor
+from agents.imitation import KLAnchor
 from agents.runs import CHECKPOINTS, ProgressBar, StopRequest, next_multiple, save_model
 from agents.validation import Validation
 
@@ -67,16 +67,16 @@ class Validations(BaseCallback):
 
 
 class KLAnchorPull(BaseCallback):
-    """``anchor``'s pull after each update, on the rollout it learned from: taken at its end,
+    """``kl_anchor``'s pull after each update, on the rollout it learned from: taken at its end,
     pulled at the next start (the update in between), the KL before the pull logged as
     ``anchor/kl``."""
 
-    def __init__(self, anchor: Anchor) -> None:
+    def __init__(self, kl_anchor: KLAnchor) -> None:
         super().__init__()
-        self.anchor = anchor
+        self.kl_anchor = kl_anchor
 
     def _on_rollout_start(self) -> None:  # (the update of the last rollout is done)
-        kl = self.anchor.pull(self.model.policy)
+        kl = self.kl_anchor.pull(self.model.policy)
         if kl is not None:
             self.logger.record("anchor/kl", kl)
 
@@ -84,7 +84,7 @@ class KLAnchorPull(BaseCallback):
         return True
 
     def _on_rollout_end(self) -> None:
-        self.anchor.remember(self.model.rollout_buffer.observations)
+        self.kl_anchor.remember(self.model.rollout_buffer.observations)
 
 
 class Budget(BaseCallback):
@@ -149,8 +149,8 @@ class Progress(BaseCallback):
 
 
 class TrainingCallbacks(CallbackList):
-    """The callbacks of a training, in the order each step runs them: the anchor's pull (with
-    ``anchor``), checkpoints, validations (with ``validation``; none if ``validate_every`` is
+    """The callbacks of a training, in the order each step runs them: the KL anchor's pull (with
+    ``kl_anchor``), checkpoints, validations (with ``validation``; none if ``validate_every`` is
     0), the budget and the progress. ``frames``: those played so far (the frames are counted on
     from them); the others as their callbacks take them."""
 
@@ -163,10 +163,10 @@ class TrainingCallbacks(CallbackList):
         validation: Validation | None = None,
         stop: StopRequest | None = None,
         progress_bar: bool = False,
-        anchor: Anchor | None = None,
+        kl_anchor: KLAnchor | None = None,
     ) -> None:
         self.budget = Budget(config, frames, started, stop)
-        callbacks: list[BaseCallback] = [KLAnchorPull(anchor)] if anchor else []
+        callbacks: list[BaseCallback] = [KLAnchorPull(kl_anchor)] if kl_anchor else []
         callbacks.append(Checkpoints(config, run))
         if validation is not None and config.validate_every:
             callbacks.append(Validations(config, validation, frames))

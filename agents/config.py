@@ -39,6 +39,9 @@ FORBIDDEN_ENV_KWARGS = ("render_mode", "num_threads", "autoreset_mode")
 # The agents train on the native vector env of the pinball envs: ids registered with this entry
 # point (Pinball-v0, PinballProcgen-v0, or another id registered with it).
 PINBALL_ENTRY_POINT = "pinball_env.env:PinballEnv"
+# Keys renamed since configs were written, old name -> new: the old loads as the new (the
+# config.yaml of older runs, the models that carry it, YAML files written before).
+RENAMED_KEYS = {"anchor_coef": "kl_anchor_coef"}  # ("anchor" is a ball-search spot in the env)
 
 
 class ConfigError(ValueError):
@@ -137,10 +140,11 @@ class TrainConfig(_RunConfig):
     imitation_learning_rate: float | None = None
     """The warm start's learning rate (None: the algorithm's first learning rate), so that a
     gentle fine-tuning rate does not also weaken the fit."""
-    anchor_coef: float = 0.0
+    kl_anchor_coef: float = 0.0
     """With a warm start: the weight of the pull back towards it after each update, a pass over
-    the update's states lowering KL(warm start || policy) (``agents.imitation.Anchor``; 0:
-    none). A resume takes the warm start from the run's ``checkpoints/step_0.zip``."""
+    the update's states lowering KL(warm start || policy) (``agents.imitation.KLAnchor``; 0:
+    none). A resume takes the warm start from the run's ``checkpoints/step_0.zip``. Its old
+    name ``anchor_coef`` still loads (``RENAMED_KEYS``)."""
     validate_every: int = 0
     """Every this many env steps, and at the end (0: never), the model plays
     ``validate_episodes`` whole games from ``validate_seed`` on, deterministically; the best of
@@ -285,11 +289,22 @@ def config_from_dict(
     if kind is RllibConfig and "policy" in data:
         raise ConfigError(f"{source}: a stable-baselines3 config (it has a policy): train it "
                           "with python -m agents.train")  # fmt: skip
+    _rename_keys(data, source)
     _check_keys(data, kind, source, "")
     _check_keys(env_data, EnvConfig, source, "env.")
     config = kind(**data, env=EnvConfig(**env_data))
     check_config(config, source)
     return config
+
+
+def _rename_keys(data: dict[str, Any], source: str) -> None:
+    """Give the keys of ``RENAMED_KEYS`` in ``data`` their new names (in place); ConfigError
+    where both names are given."""
+    for old, new in RENAMED_KEYS.items():
+        if old in data:
+            if new in data:
+                raise ConfigError(f"{source}: {old} is the old name of {new}: give {new} alone")
+            data[new] = data.pop(old)
 
 
 def _check_keys(data: dict[str, Any], cls: type, source: str, prefix: str) -> None:
@@ -421,11 +436,11 @@ def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> N
     rate = config.imitation_learning_rate
     if rate is not None and not _positive(rate):
         fail("imitation_learning_rate", f"must be a positive number or null, not {rate!r}")
-    anchor = config.anchor_coef
-    if anchor != 0 and not _positive(anchor):
-        fail("anchor_coef", f"must be a number >= 0, not {anchor!r}")
-    if anchor and not config.imitation_steps:
-        fail("anchor_coef", "pulls towards a warm start: set imitation_steps too")
+    kl_anchor = config.kl_anchor_coef
+    if kl_anchor != 0 and not _positive(kl_anchor):
+        fail("kl_anchor_coef", f"must be a number >= 0, not {kl_anchor!r}")
+    if kl_anchor and not config.imitation_steps:
+        fail("kl_anchor_coef", "pulls towards a warm start: set imitation_steps too")
     if not config.imitation_steps:
         return
     if config.algo not in ("ppo", "a2c"):

@@ -12,8 +12,8 @@ as the algorithm will see them), ``imitation_epochs`` passes in minibatches at
 The heuristic is the bar the agent has to beat: copying it is where learning starts, not
 the result; the evaluation plays the learned policy alone.
 
-With ``anchor_coef`` > 0, :class:`Anchor` keeps the learner near that start: after each update,
-one pass over the states of the rollout the update learned from lowers ``anchor_coef`` times
+With ``kl_anchor_coef`` > 0, :class:`KLAnchor` keeps the learner near that start: after each update,
+one pass over the states of the rollout the update learned from lowers ``kl_anchor_coef`` times
 KL(warm start || policy), the warm start's action distribution against the policy's. Fine-tuning
 from a copy forgets what the copy knew on states the gradient says little about (Wolczyk et al.
 2024, "Fine-tuning reinforcement learning models is secretly a forgetting mitigation problem");
@@ -140,7 +140,7 @@ def imitate(
     }
 
 
-class Anchor:
+class KLAnchor:
     """The pull towards the warm start (see the module's docstring) of an actor-critic with
     discrete actions. ``reference`` is the warm start's policy (a frozen copy is kept);
     :meth:`remember` takes a rollout's states, :meth:`pull` fits the model's policy to the

@@ -34,7 +34,7 @@ from typing import Any
 from agents.cli import run_training, training_parser
 from agents.config import ConfigError, TrainConfig, algorithm_class, sb3_hyperparams
 from agents.envs import make_env_chain
-from agents.imitation import Anchor, imitate
+from agents.imitation import KLAnchor, imitate
 from agents.runs import (
     BEST_MODEL,
     CHECKPOINTS,
@@ -103,13 +103,13 @@ def _train(
         save_model(model, run / CHECKPOINTS, WARM_START, config)
         record_trained(run, 0, frames)
     try:
-        anchor = _anchor(config, run, model)
+        kl_anchor = _kl_anchor(config, run, model)
     except ConfigError:
         venv.close()
         raise
     validation = Validation(config, run) if config.validate_every else None
     callback = TrainingCallbacks(
-        config, run, frames, started, validation, stop, progress_bar, anchor
+        config, run, frames, started, validation, stop, progress_bar, kl_anchor
     )
     left = config.total_timesteps - model.num_timesteps
     if left > 0 and not stop:
@@ -168,20 +168,21 @@ def _model(
     return venv, model, max(keep_progress(run), trained_frames(run))
 
 
-def _anchor(config: TrainConfig, run: Path, model: Any) -> Anchor | None:
-    """The pull towards the warm start (``anchor_coef``; None without one): the model's policy
+def _kl_anchor(config: TrainConfig, run: Path, model: Any) -> KLAnchor | None:
+    """The pull towards the warm start (``kl_anchor_coef``; None without one): the model's policy
     before it has learned (just fitted, or resumed from the warm start's checkpoint), else the
     warm start's checkpoint's."""
-    if not config.anchor_coef:
+    if not config.kl_anchor_coef:
         return None
     reference = model.policy
     if model.num_timesteps:
         path = run / CHECKPOINTS / f"{WARM_START}.zip"
         if not path.is_file():
-            raise ConfigError(f"{run}: anchor_coef needs the warm start's checkpoint {path}")
+            raise ConfigError(f"{run}: kl_anchor_coef needs the warm start's checkpoint {path}")
         reference = algorithm_class(config.algo).load(path, device=config.device).policy
     batch_size = getattr(model, "batch_size", None) or model.n_steps * model.n_envs
-    return Anchor(reference, config.anchor_coef, batch_size, config.seed, model.max_grad_norm)
+    coef = config.kl_anchor_coef
+    return KLAnchor(reference, coef, batch_size, config.seed, model.max_grad_norm)
 
 
 def clear_training_logs(run: Path) -> None:

@@ -247,9 +247,11 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["imitation_steps=100", "algo=dqn", "hyperparams={}"], "needs an actor-critic"),
         (["imitation_steps=100", "env.kwargs.action_type=multibinary"], "needs discrete actions"),
         (["imitation_steps=100", "env.frame_stack=2"], "needs state observations"),
-        (["anchor_coef=-1"], "anchor_coef: must be a number >= 0"),
-        (["anchor_coef=nan", "imitation_steps=100"], "anchor_coef: must be a number >= 0"),
-        (["anchor_coef=0.5", "imitation_steps=0"], "anchor_coef: pulls towards a warm start"),
+        (["kl_anchor_coef=-1"], "kl_anchor_coef: must be a number >= 0"),
+        (["kl_anchor_coef=nan", "imitation_steps=100"], "kl_anchor_coef: must be a number >= 0"),
+        (["kl_anchor_coef=0.5", "imitation_steps=0"], "kl_anchor_coef: pulls towards a warm start"),
+        (["anchor_coef=0.5", "imitation_steps=0"], "kl_anchor_coef: pulls towards"),  # (old name)
+        (["anchor_coef=0.5", "kl_anchor_coef=0.5"], "anchor_coef is the old name of kl_anchor"),
         (["validate_every=-1"], "validate_every: must be an integer >= 0"),
         (["validate_every=9", "validate_episodes=0"], "validate_episodes: must be an integer >= 1"),
         (["validate_every=9", "validate_seed=31"], "validate_seed: 31 overlaps the training seeds"),
@@ -508,17 +510,17 @@ def test_the_warm_start_fits_at_its_own_learning_rate():
 
 
 def test_the_anchor_pulls_a_drifted_policy_back_to_its_warm_start():
-    """Anchor: KL(warm start || policy) is 0 at the start, and each pull over a rollout's
+    """KLAnchor: KL(warm start || policy) is 0 at the start, and each pull over a rollout's
     states lowers it; the warm start it keeps is a frozen copy."""
     import torch
     from stable_baselines3 import PPO
 
-    from agents.imitation import Anchor
+    from agents.imitation import KLAnchor
 
     config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])
     venv = make_env_chain(config)
     model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
-    anchor = Anchor(model.policy, coef=1.0, batch_size=64, seed=0)
+    anchor = KLAnchor(model.policy, coef=1.0, batch_size=64, seed=0)
     frozen = [p.detach().clone() for p in anchor.reference.parameters()]
     venv.reset()
     actions = [np.array([venv.action_space.sample()] * 4) for _ in range(64)]
@@ -543,10 +545,10 @@ def test_the_anchor_pulls_a_drifted_policy_back_to_its_warm_start():
 
 def test_a_warm_start_is_checkpointed_and_an_anchored_run_resumes_from_it(tmp_path, monkeypatch):
     """A finished warm start is checkpoint step_0 with its frames: a run killed after it goes on
-    from there without fitting again, its frames counted on; with anchor_coef, the pull's KL is
+    from there without fitting again, its frames counted on; with kl_anchor_coef, the pull's KL is
     logged and a resume takes the warm start from that checkpoint."""
     config = ROOT / "configs/agents/ppo.yaml"
-    run = tiny_run(config, tmp_path / "runs", "imitation_steps=64", "anchor_coef=1.0")
+    run = tiny_run(config, tmp_path / "runs", "imitation_steps=64", "kl_anchor_coef=1.0")
     assert (run / "checkpoints/step_0.zip").is_file()
     with open(run / "progress.csv") as file:
         rows = list(csv.DictReader(file))
@@ -577,7 +579,7 @@ def test_a_warm_start_is_checkpointed_and_an_anchored_run_resumes_from_it(tmp_pa
     assert latest_checkpoint(run)[0] >= 512  # (model.zip is the best validated)
     for path in (run / "checkpoints").glob("step_0*"):
         path.unlink()
-    with pytest.raises(ConfigError, match="anchor_coef needs the warm start's checkpoint"):
+    with pytest.raises(ConfigError, match="kl_anchor_coef needs the warm start's checkpoint"):
         train.train(load_config(run / "config.yaml", ["total_timesteps=1024"]), run, resume=True)
 
 

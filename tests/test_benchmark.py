@@ -364,6 +364,7 @@ def test_the_protocol_evaluation_plays_sticky_held_out_games(tmp_path):
 def test_a_key_added_later_leaves_the_digest_of_configs_at_its_default():
     config = load_config(ROOT / "configs/agents/ppo_close_v1.yaml")
     assert set(methods.LATER_KEYS) <= set(config.to_dict())
-    anchored = dataclasses.replace(config, anchor_coef=1.0)
+    anchored = dataclasses.replace(config, kl_anchor_coef=1.0)
     assert "anchor_coef" not in methods.trained_by(config)
+    assert "kl_anchor_coef" not in methods.trained_by(config)
     assert methods.config_digest(anchored) != methods.config_digest(config)

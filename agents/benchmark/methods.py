@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from agents.config import TrainConfig
+from agents.config import RENAMED_KEYS, TrainConfig
 from pinball_env import protocol
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs" / "agents"
@@ -79,14 +79,18 @@ SCALED_BY_BUDGET = ("total_timesteps", "checkpoint_every", "validate_every")
 
 # Keys added to the configs after runs were published, each with its default, which trains as
 # before the key was there: at it, the key stays out of the digest, so those runs keep theirs.
-LATER_KEYS = {"anchor_coef": 0.0}
+LATER_KEYS = {"kl_anchor_coef": 0.0}
+# Keys renamed after runs were published (agents.config.RENAMED_KEYS), new -> old: the digest
+# names them as those runs' did.
+DIGEST_NAMES = {new: old for old, new in RENAMED_KEYS.items()}
 
 
 def trained_by(config: TrainConfig) -> dict[str, Any]:
     """What of a config trains, flat: all of it but its ``notes`` (words do not train) and the
-    later keys at their defaults (``LATER_KEYS``)."""
+    later keys at their defaults (``LATER_KEYS``), renamed keys under their published names
+    (``DIGEST_NAMES``)."""
     return {
-        key: value for key, value in _flat(config.to_dict()).items()
+        DIGEST_NAMES.get(key, key): value for key, value in _flat(config.to_dict()).items()
         if key != "notes" and not (key in LATER_KEYS and value == LATER_KEYS[key])
     }  # fmt: skip
 
