@@ -3,7 +3,7 @@
     python -m agents.evaluate --model RUN_OR_ZIP --episodes 100 [--video game.mp4] [--curve]
     python -m agents.evaluate --policy heuristic --episodes 100 [--env Pinball-v1]
     python -m agents.evaluate --model RUN_OR_ZIP --watch [--episodes 3]
-    python -m agents.evaluate --model pretrained:ppo-v1 --protocol
+    python -m agents.evaluate --model pretrained:ppo-gentle-v1 --protocol
     python -m agents.evaluate --recording my_games.json
 
 Each game is played to its end (the last ball drained, or the two-minute time limit), on seeds

@@ -7,13 +7,31 @@ import pytest
 
 from agents.config import ConfigError
 from agents.evaluation import evaluate_protocol, player_for
-from agents.policy import PRETRAINED, load_policy, pretrained_card
+from agents.policy import (
+    PRETRAINED,
+    PRETRAINED_ALIASES,
+    PRETRAINED_DIR,
+    PRETRAINED_PREFIX,
+    load_policy,
+    pretrained_card,
+    resolve_model_path,
+)
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
 
 def test_the_best_ppo_agents_ship():
     assert {"ppo-v0", "ppo-v1"} <= set(PRETRAINED)
+
+
+def test_each_agent_ships_under_its_methods_name_and_its_old_name_still_loads_it():
+    for model in PRETRAINED_DIR.glob("*.zip"):
+        card = pretrained_card(model.stem)
+        assert card["name"] == card["method"] == model.stem
+    for alias, name in PRETRAINED_ALIASES.items():
+        assert not (PRETRAINED_DIR / f"{alias}.zip").exists()  # (one file, one name)
+        assert resolve_model_path(PRETRAINED_PREFIX + alias) == PRETRAINED_DIR / f"{name}.zip"
+        assert pretrained_card(alias) == pretrained_card(name)
 
 
 @pytest.mark.parametrize("name", PRETRAINED)

@@ -41,8 +41,9 @@ refused. A table can so grow over machines and sessions, a run at a time.
 held-out ones) a pretrained agent that ships with the project: ``agents/pretrained/NAME.zip``
 and its card ``NAME.json`` (method, config, commit, training, scores under the protocol),
 loadable as ``pretrained:NAME`` (``agents.policy.load_policy``). NAME is the method's unless
-given: ``--ship ppo-gentle-v1=ppo-v1`` ships the best recipe under the name users load. The
-chosen run must be in OUT, where its model is; ``--ship-from-out`` ships the best run there when
+given (``--ship METHOD=NAME``; the shipped agents carry their method's name, and the names they
+shipped under before load as aliases: ``agents.policy.PRETRAINED_ALIASES``). The chosen run
+must be in OUT, where its model is; ``--ship-from-out`` ships the best run there when
 a better merged one's model is gone, and its card says so.
 
 ``--tiny`` trains a few thousand frames of small settings and plays a few games: the whole
