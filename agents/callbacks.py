@@ -1,5 +1,5 @@
 """The callbacks of a stable-baselines3 training, one job each, composed with SB3's
-``CallbackList`` (:func:`training_callbacks`):
+``CallbackList`` (:class:`TrainingCallbacks`):
 
 - :class:`Checkpoints`: a checkpoint every ``checkpoint_every`` env steps;
 - :class:`Validations`: the validation games every ``validate_every`` env steps;

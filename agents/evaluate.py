@@ -107,22 +107,22 @@ def run_evaluation(args: argparse.Namespace) -> dict[str, Any]:
     with ``--protocol``), then the first one's video and the run's learning curve if asked."""
     player = player_for(args.policy, args.model, args.table, args.env)
     out = args.out or default_out(args.policy, args.model, args.protocol)
-    seed = args.seed
     if args.protocol:
         check_protocol_games(args.table, args.seed, args.episodes)
-        player, seed = protocol_player(player), EVAL_SEEDS.start
+    played = protocol_player(player) if args.protocol else player  # (the game it plays)
     if args.watch:
-        first = first_seed(player, seed, args.episodes)
-        return watch_games(player.config, player.normalization, player.policy, first, args.episodes)
+        seed = EVAL_SEEDS.start if args.protocol else args.seed
+        first = first_seed(played, seed, args.episodes)
+        return watch_games(played.config, played.normalization, played.policy, first, args.episodes)
     if args.protocol:
         summary = evaluate_protocol(player, out, args.episodes)
     else:
         summary = evaluate(player, out, args.episodes, args.seed)
     first = summary["seeds"][0]
     if args.video is not None:
-        record_video(player.config, player.normalization, player.policy, first, args.video)
+        record_video(played.config, played.normalization, played.policy, first, args.video)
     if args.curve and args.model is not None and args.model.is_dir():
-        curve_with_baselines(args.model, player, first, args.episodes, out)
+        curve_with_baselines(args.model, played, first, args.episodes, out)
     return summary
 
 
