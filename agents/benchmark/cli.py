@@ -16,7 +16,9 @@ from pinball_env import protocol
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any] | None:
-    parser = argparse.ArgumentParser(description=agents.benchmark.__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m agents.benchmark", description=agents.benchmark.__doc__.split("\n")[0]
+    )
     parser.add_argument("--methods", nargs="+", choices=list(METHODS), default=list(METHODS),
                         help="the rows (default: all)")  # fmt: skip
     parser.add_argument("--seeds", nargs="+", type=int, default=list(protocol.TRAINING_SEEDS),
