@@ -27,7 +27,7 @@ import yaml
 from pinball_env.extras import missing_message
 from pinball_env.game import check_playable
 from pinball_env.options import GAME_FRAMES, PinballOptions
-from pinball_env.protocol import protocol_options
+from pinball_env.protocol import EVAL_SEEDS, protocol_options
 from pinball_env.table import Table, load_any_table
 
 ALGORITHMS = ("ppo", "a2c", "dqn")
@@ -39,6 +39,9 @@ FORBIDDEN_ENV_KWARGS = ("render_mode", "num_threads", "autoreset_mode")
 # The agents train on the native vector env of the pinball envs: ids registered with this entry
 # point (Pinball-v0, PinballProcgen-v0, or another id registered with it).
 PINBALL_ENTRY_POINT = "pinball_env.envs:PinballEnv"
+# Keys renamed since configs were written, old name -> new: the old loads as the new (the
+# config.yaml of older runs, the models that carry it, YAML files written before).
+RENAMED_KEYS = {"anchor_coef": "kl_anchor_coef"}  # ("anchor" is a ball-search spot in the env)
 
 
 class ConfigError(ValueError):
@@ -71,47 +74,62 @@ class EnvConfig:
         return {"max_episode_steps": None, "max_frames": GAME_FRAMES, **self.kwargs}
 
 
+@dataclass(frozen=True)
 class _RunConfig:
-    """What both kinds of run config share."""
+    """What both kinds of run config share: the budget, the seeds, the threads, the env and the
+    bookkeeping (each kind adds its own keys)."""
+
+    algo: str = "ppo"
+    """The algorithm: one of ALGORITHMS (stable-baselines3's) or, for RLlib, its PPO."""
+    total_timesteps: int = 1_000_000
+    """Env steps to train for, summed over all envs (frames = steps x frame_skip)."""
+    max_minutes: float = 0.0
+    """Wall-clock limit of a training session [min] (0: none): stable-baselines3 stops at the
+    first env step past it (the unfinished rollout is not learned from), RLlib after the
+    training iteration past it, however few of ``total_timesteps`` are done, and the model is
+    saved."""
+    seed: int = 0
+    """Seed of the algorithm and of the training games: stable-baselines3's env i starts from
+    seed + i; RLlib's env i of env runner k (0: the driver's) from seed + k * num_envs + i."""
+    torch_threads: int = 1
+    """torch's thread count (of the learner; its default, one per core, was seen to slow SB3
+    15-20x on 2 cores)."""
+    env_threads: int = 1
+    """Threads that step the envs' physics (of each RLlib env runner)."""
+    hyperparams: dict[str, Any] = field(default_factory=dict)
+    """Keyword arguments of the algorithm: stable-baselines3's constructor (``policy_kwargs``
+    included) or RLlib's ``PPOConfig.training`` (lr, gamma, lambda_, num_epochs,
+    train_batch_size_per_learner, minibatch_size, entropy_coeff...)."""
+    env: EnvConfig = field(default_factory=EnvConfig)
+    """The environment (for RLlib: ``num_envs`` games per env runner, and ``normalize`` runs
+    its ``MeanStdFilter`` over the observations)."""
+    checkpoint_every: int = 500_000
+    """Write a checkpoint every this many env steps (0: only the final model)."""
+    eval_seed: int = EVAL_SEEDS.start
+    """First seed of evaluation games (the protocol's held-out games, ``EVAL_SEEDS``); training
+    never uses seeds from here on."""
+    notes: str = ""
+    """Free text: what this config is for, what shaping it uses and why."""
 
     def to_dict(self) -> dict[str, Any]:
         """The config as plain data (what ``config.yaml`` holds)."""
-        return dataclasses.asdict(self)  # type: ignore[call-overload]
+        return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True)
 class TrainConfig(_RunConfig):
-    """A training run: algorithm, policy, hyperparameters, env, budget and bookkeeping."""
+    """A stable-baselines3 training run (``agents.train``): over the shared keys, the policy,
+    the frame budget, the device, the warm start and its KL anchor, and the validation games."""
 
-    algo: str = "ppo"
-    """One of ALGORITHMS (stable-baselines3's PPO, A2C, DQN)."""
     policy: str = "MlpPolicy"
     """``MlpPolicy`` for state observations, ``CnnPolicy`` for images."""
-    total_timesteps: int = 1_000_000
-    """Env steps to train for, summed over the envs (frames = steps x frame_skip)."""
-    max_minutes: float = 0.0
-    """Wall-clock limit of a training session [min] (0: none): learning stops at the first env
-    step past it (the unfinished rollout is not learned from), however few of
-    ``total_timesteps`` are done, and the model is saved."""
     total_frames: int = 0
     """A budget in frames (0: none), summed over the envs, the warm start's games included:
     learning stops at the first env step at or past it, as at ``max_minutes``. The benchmark
     protocol's budget (``pinball_env.protocol.TRAINING_FRAMES``): frames, not steps, so that
     frame skips and ``skip_above`` cost what they play."""
-    seed: int = 0
-    """Seed of the algorithm and of the training games (env i starts from seed + i)."""
     device: str = "cpu"
     """torch device."""
-    torch_threads: int = 1
-    """torch's thread count (its default, one per core, was seen to slow SB3 15-20x on 2 cores)."""
-    env_threads: int = 1
-    """Threads that step the envs' physics."""
-    hyperparams: dict[str, Any] = field(default_factory=dict)
-    """Keyword arguments of the algorithm's constructor (``policy_kwargs`` included)."""
-    env: EnvConfig = field(default_factory=EnvConfig)
-    """The environment."""
-    checkpoint_every: int = 500_000
-    """Write a checkpoint every this many env steps (0: only the final model)."""
     imitation_steps: int = 0
     """A warm start (0: none; PPO and A2C on state observations and discrete actions): env
     steps, summed over the envs, of the heuristic playing the training games, whose actions the
@@ -122,10 +140,11 @@ class TrainConfig(_RunConfig):
     imitation_learning_rate: float | None = None
     """The warm start's learning rate (None: the algorithm's first learning rate), so that a
     gentle fine-tuning rate does not also weaken the fit."""
-    anchor_coef: float = 0.0
+    kl_anchor_coef: float = 0.0
     """With a warm start: the weight of the pull back towards it after each update, a pass over
-    the update's states lowering KL(warm start || policy) (``agents.imitation.Anchor``; 0:
-    none). A resume takes the warm start from the run's ``checkpoints/step_0.zip``."""
+    the update's states lowering KL(warm start || policy) (``agents.imitation.KLAnchor``; 0:
+    none). A resume takes the warm start from the run's ``checkpoints/step_0.zip``. Its old
+    name ``anchor_coef`` still loads (``RENAMED_KEYS``)."""
     validate_every: int = 0
     """Every this many env steps, and at the end (0: never), the model plays
     ``validate_episodes`` whole games from ``validate_seed`` on, deterministically; the best of
@@ -135,10 +154,6 @@ class TrainConfig(_RunConfig):
     """Games of each validation (the same games every time)."""
     validate_seed: int = 300_000
     """First seed of the validation games: neither a training game nor an evaluation game."""
-    eval_seed: int = 100_000
-    """First seed of evaluation games; training never uses seeds from here on."""
-    notes: str = ""
-    """Free text: what this config is for, what shaping it uses and why."""
 
     @property
     def label(self) -> str:
@@ -162,37 +177,12 @@ class RllibConfig(_RunConfig):
     """A Ray RLlib run (``agents.rllib``): PPO on RLlib's current API stack, its env runners
     stepping the native vector env."""
 
-    algo: str = "ppo"
-    """RLlib's PPO (the one algorithm shipped)."""
-    total_timesteps: int = 1_000_000
-    """Env steps to sample, summed over all env runners and their envs."""
-    max_minutes: float = 0.0
-    """Wall-clock limit [min] (0: none), checked after each training iteration."""
-    seed: int = 0
-    """Seed of the algorithm; env i of env runner k (0: the driver's) first resets with
-    seed + k * num_envs + i."""
     env_runners: int = 2
     """Remote env runner actors (``num_env_runners``; 0: sample in the driver)."""
     cpus_per_env_runner: float = 1.0
     """CPUs Ray reserves for each env runner (``num_cpus_per_env_runner``)."""
-    torch_threads: int = 1
-    """torch's thread count in the driver (the learner)."""
-    env_threads: int = 1
-    """Threads that step each env runner's physics."""
-    hyperparams: dict[str, Any] = field(default_factory=dict)
-    """Keyword arguments of ``PPOConfig.training`` (lr, gamma, lambda_, num_epochs,
-    train_batch_size_per_learner, minibatch_size, entropy_coeff...)."""
     model: dict[str, Any] = field(default_factory=dict)
     """Fields of RLlib's ``DefaultModelConfig`` (fcnet_hiddens, fcnet_activation...)."""
-    env: EnvConfig = field(default_factory=EnvConfig)
-    """The environment; ``num_envs`` games per env runner, ``normalize`` runs RLlib's
-    ``MeanStdFilter`` over the observations."""
-    checkpoint_every: int = 500_000
-    """Write a checkpoint every this many env steps (0: only the final model)."""
-    eval_seed: int = 100_000
-    """First seed of evaluation games; training never uses seeds from here on."""
-    notes: str = ""
-    """Free text: what this config is for."""
 
     @property
     def label(self) -> str:
@@ -299,11 +289,22 @@ def config_from_dict(
     if kind is RllibConfig and "policy" in data:
         raise ConfigError(f"{source}: a stable-baselines3 config (it has a policy): train it "
                           "with python -m agents.train")  # fmt: skip
+    _rename_keys(data, source)
     _check_keys(data, kind, source, "")
     _check_keys(env_data, EnvConfig, source, "env.")
     config = kind(**data, env=EnvConfig(**env_data))
     check_config(config, source)
     return config
+
+
+def _rename_keys(data: dict[str, Any], source: str) -> None:
+    """Give the keys of ``RENAMED_KEYS`` in ``data`` their new names (in place); ConfigError
+    where both names are given."""
+    for old, new in RENAMED_KEYS.items():
+        if old in data:
+            if new in data:
+                raise ConfigError(f"{source}: {old} is the old name of {new}: give {new} alone")
+            data[new] = data.pop(old)
 
 
 def _check_keys(data: dict[str, Any], cls: type, source: str, prefix: str) -> None:
@@ -435,11 +436,11 @@ def _check_imitation(config: TrainConfig, fail: Callable[[str, str], None]) -> N
     rate = config.imitation_learning_rate
     if rate is not None and not _positive(rate):
         fail("imitation_learning_rate", f"must be a positive number or null, not {rate!r}")
-    anchor = config.anchor_coef
-    if anchor != 0 and not _positive(anchor):
-        fail("anchor_coef", f"must be a number >= 0, not {anchor!r}")
-    if anchor and not config.imitation_steps:
-        fail("anchor_coef", "pulls towards a warm start: set imitation_steps too")
+    kl_anchor = config.kl_anchor_coef
+    if kl_anchor != 0 and not _positive(kl_anchor):
+        fail("kl_anchor_coef", f"must be a number >= 0, not {kl_anchor!r}")
+    if kl_anchor and not config.imitation_steps:
+        fail("kl_anchor_coef", "pulls towards a warm start: set imitation_steps too")
     if not config.imitation_steps:
         return
     if config.algo not in ("ppo", "a2c"):

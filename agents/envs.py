@@ -15,7 +15,7 @@ from agents.config import TrainConfig
 from pinball_env.wrappers import SB3VecEnv, SB3VecNormalize
 
 
-def make_env(
+def make_env_chain(
     config: TrainConfig,
     num_envs: int | None = None,
     seed: int | None = None,

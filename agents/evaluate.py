@@ -3,14 +3,14 @@
     python -m agents.evaluate --model RUN_OR_ZIP --episodes 100 [--video game.mp4] [--curve]
     python -m agents.evaluate --policy heuristic --episodes 100 [--env Pinball-v1]
     python -m agents.evaluate --model RUN_OR_ZIP --watch [--episodes 3]
-    python -m agents.evaluate --model pretrained:ppo-v1 --protocol
+    python -m agents.evaluate --model pretrained:ppo-gentle-v1 --protocol
     python -m agents.evaluate --recording my_games.json
 
 Each game is played to its end (the last ball drained, or the two-minute time limit), on seeds
 ``seed .. seed + episodes - 1`` (``--seed``, by default the config's ``eval_seed``, 100000). A
 model plays through the env chain it was trained on (frame skip, frame stacking, frozen
 ``VecNormalize`` statistics), choosing its actions deterministically; ``random`` (uniform over
-the actions, every frame) and ``heuristic`` (``pinball_env.heuristic.HeuristicPolicy``) play
+the actions, every frame) and ``heuristic`` (``pinball_env.players.HeuristicPolicy``) play
 frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/POLICY``):
 
 - ``episodes.csv``: per game the seed, score, return (the env's reward, shaping included),
@@ -37,12 +37,12 @@ the protocol's game, and its mean is the human score the protocol normalises by
 table's frame rate), printing each score; close the window or press Ctrl-C to stop.
 
 ``report(run)`` (``python -m agents.train ... --report``) does all of it for a run and its two
-baselines and writes ``report.json`` (``evaluate`` and ``report`` are ``agents.report``'s; the
-games are played by ``agents.rollouts`` and shown by ``agents.watch``). Models load through
-``agents.policy.load_policy``: a run folder, a model or checkpoint zip (copied alone, it carries
-its config and statistics), or an RLlib run or checkpoint folder (``agents.rllib``), which plays
-the same games through its checkpoint's RL module and observation filter. Models are pickles:
-load only models you trust.
+baselines and writes ``report.json`` (``evaluate`` is ``agents.evaluation``'s, ``report``
+``agents.report``'s; the games are played by ``agents.rollouts`` and shown by
+``agents.watch``). Models load through ``agents.policy.load_policy``: a run folder, a model or
+checkpoint zip (copied alone, it carries its config and statistics), or an RLlib run or
+checkpoint folder (``agents.rllib``), which plays the same games through its checkpoint's RL
+module and observation filter. Models are pickles: load only models you trust.
 """
 
 import argparse
@@ -50,14 +50,26 @@ from pathlib import Path
 from typing import Any
 
 from agents.config import ConfigError
-from agents.report import evaluate, score_recording
+from agents.evaluation import (
+    check_protocol_games,
+    default_out,
+    evaluate,
+    evaluate_protocol,
+    first_seed,
+    player_for,
+    protocol_player,
+    score_recording,
+)
+from agents.report import curve_with_baselines
 
 # The functions of an evaluation, as agents.evaluate has always had them.
 from agents.report import report as report
 from agents.rollouts import BASELINES
 from agents.rollouts import model_policy as model_policy
 from agents.rollouts import rollouts as rollouts
+from agents.watch import record_video
 from agents.watch import watch_games as watch_games
+from pinball_env.protocol import EVAL_SEEDS
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -85,13 +97,33 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     try:
         if args.recording is not None:
             return score_recording(args.recording, args.out)
-        return evaluate(
-            policy=args.policy, model_path=args.model, table=args.table, env=args.env,
-            episodes=args.episodes, seed=args.seed, out=args.out, video=args.video,
-            curve=args.curve, watch=args.watch, protocol=args.protocol,
-        )  # fmt: skip
+        return run_evaluation(args)
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
+
+
+def run_evaluation(args: argparse.Namespace) -> dict[str, Any]:
+    """The games ``args`` ask for: watched in a window, or played and written (on the protocol
+    with ``--protocol``), then the first one's video and the run's learning curve if asked."""
+    player = player_for(args.policy, args.model, args.table, args.env)
+    out = args.out or default_out(args.policy, args.model, args.protocol)
+    if args.protocol:
+        check_protocol_games(args.table, args.seed, args.episodes)
+    played = protocol_player(player) if args.protocol else player  # (the game it plays)
+    if args.watch:
+        seed = EVAL_SEEDS.start if args.protocol else args.seed
+        first = first_seed(played, seed, args.episodes)
+        return watch_games(played.config, played.normalization, played.policy, first, args.episodes)
+    if args.protocol:
+        summary = evaluate_protocol(player, out, args.episodes)
+    else:
+        summary = evaluate(player, out, args.episodes, args.seed)
+    first = summary["seeds"][0]
+    if args.video is not None:
+        record_video(played.config, played.normalization, played.policy, first, args.video)
+    if args.curve and args.model is not None and args.model.is_dir():
+        curve_with_baselines(args.model, played, first, args.episodes, out)
+    return summary
 
 
 if __name__ == "__main__":

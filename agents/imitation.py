@@ -1,7 +1,7 @@
 """A warm start for actor-critic agents: behaviour cloning of the heuristic.
 
 With ``imitation_steps`` > 0 in a config, before it learns, the heuristic
-(``pinball_env.heuristic.HeuristicPolicy``) plays the training games for that many env steps
+(``pinball_env.players.HeuristicPolicy``) plays the training games for that many env steps
 (summed over the envs), through the training env chain, so that ``VecNormalize``'s statistics
 start from its games. The policy is then fitted to the heuristic's actions (cross-entropy) and
 the value to the discounted returns of its games (mean squared error, the rewards normalised
@@ -12,8 +12,8 @@ as the algorithm will see them), ``imitation_epochs`` passes in minibatches at
 The heuristic is the bar the agent has to beat: copying it is where learning starts, not
 the result; the evaluation plays the learned policy alone.
 
-With ``anchor_coef`` > 0, :class:`Anchor` keeps the learner near that start: after each update,
-one pass over the states of the rollout the update learned from lowers ``anchor_coef`` times
+With ``kl_anchor_coef`` > 0, :class:`KLAnchor` keeps the learner near that start: after each update,
+one pass over the states of the rollout the update learned from lowers ``kl_anchor_coef`` times
 KL(warm start || policy), the warm start's action distribution against the policy's. Fine-tuning
 from a copy forgets what the copy knew on states the gradient says little about (Wolczyk et al.
 2024, "Fine-tuning reinforcement learning models is secretly a forgetting mitigation problem");
@@ -140,7 +140,7 @@ def imitate(
     }
 
 
-class Anchor:
+class KLAnchor:
     """The pull towards the warm start (see the module's docstring) of an actor-critic with
     discrete actions. ``reference`` is the warm start's policy (a frozen copy is kept);
     :meth:`remember` takes a rollout's states, :meth:`pull` fits the model's policy to the

@@ -20,11 +20,13 @@ oldest first, images channels first) and the observation statistics frozen as th
 saved. ``act(obs)`` takes one observation of that chain or a batch of them and returns the
 greedy action(s).
 
-The agents that ship with the project load by name: ``load_policy("pretrained:ppo-v1")``
-(:data:`PRETRAINED`; each a model zip in ``agents/pretrained/`` with a card, ``NAME.json``: its
-config, the commit it was trained at, its frames and minutes of training and its scores under
-the benchmark protocol). ``pretrained:NAME`` goes wherever a model path goes
-(``python -m agents.evaluate --model pretrained:ppo-v1 --watch``).
+The agents that ship with the project load by name, their method's:
+``load_policy("pretrained:ppo-gentle-v1")`` (:data:`PRETRAINED`; each a model zip in
+``agents/pretrained/`` with a card, ``NAME.json``: its config, the commit it was trained at, its
+frames and minutes of training and its scores under the benchmark protocol; the names they
+shipped under before, such as ``ppo-v1``, load too: :data:`PRETRAINED_ALIASES`).
+``pretrained:NAME`` goes wherever a model path goes
+(``python -m agents.evaluate --model pretrained:ppo-gentle-v1 --watch``).
 
 A model zip saved by ``agents.train`` carries its config and its observation statistics (the
 entry ``pinball/agent.json``), so it loads copied alone; an older zip needs the run's
@@ -69,14 +71,22 @@ from agents.runs import (
     stats_for,
 )
 
-# The agents that ship with the project: agents/pretrained/NAME.zip, loadable as "pretrained:NAME".
+# The agents that ship with the project: agents/pretrained/NAME.zip (NAME: the method's name),
+# loadable as "pretrained:NAME".
 PRETRAINED_PREFIX = "pretrained:"
 PRETRAINED_DIR = Path(__file__).resolve().parent / "pretrained"
-PRETRAINED = tuple(sorted(path.stem for path in PRETRAINED_DIR.glob("*.zip")))
+# The names agents shipped under before they were named after their method, alias -> name:
+# pretrained:ppo-v1 was the method ppo-gentle-v1's run (the method ppo-v1 is another recipe).
+PRETRAINED_ALIASES = {"ppo-v1": "ppo-gentle-v1"}
+# Every name that loads as "pretrained:NAME": the shipped agents' and their aliases.
+PRETRAINED = tuple(
+    sorted({path.stem for path in PRETRAINED_DIR.glob("*.zip")} | set(PRETRAINED_ALIASES))
+)
 
 
 def resolve_model_path(path: str | os.PathLike[str]) -> Path:
-    """``path``, or for ``"pretrained:NAME"`` the shipped model zip of that name."""
+    """``path``, or for ``"pretrained:NAME"`` the shipped model zip of that name (or of the
+    agent an alias names)."""
     text = os.fspath(path)
     if not text.startswith(PRETRAINED_PREFIX):
         return Path(path)
@@ -86,13 +96,14 @@ def resolve_model_path(path: str | os.PathLike[str]) -> Path:
             f"{text}: no such pretrained agent (shipped: "
             f"{', '.join(PRETRAINED_PREFIX + known for known in PRETRAINED) or 'none'})"
         )
-    return PRETRAINED_DIR / f"{name}.zip"
+    return PRETRAINED_DIR / f"{PRETRAINED_ALIASES.get(name, name)}.zip"
 
 
 def pretrained_card(name: str) -> dict[str, Any]:
-    """The card of the pretrained agent ``name`` (``agents/pretrained/NAME.json``)."""
-    resolve_model_path(PRETRAINED_PREFIX + name)  # (the error for an unknown name)
-    return json.loads((PRETRAINED_DIR / f"{name}.json").read_text())
+    """The card of the pretrained agent ``name`` (``agents/pretrained/NAME.json``; an alias:
+    its agent's)."""
+    model = resolve_model_path(PRETRAINED_PREFIX + name)  # (the error for an unknown name)
+    return json.loads(model.with_suffix(".json").read_text())
 
 
 @dataclasses.dataclass(frozen=True)

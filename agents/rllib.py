@@ -62,7 +62,7 @@ ENV_NAME = "pinball"  # the env's name in ray.tune's registry
 SCORE, TRUNCATED, FRAMES = "game_score", "game_truncated", "game_frames_lifetime"
 
 
-def make_env(env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
+def make_rllib_env(env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
     """RLlib's env creator: ``env_config`` holds the env id and its options; with ``num_envs``
     (RLlib's ``vector_entry_point`` mode) it makes the native vector env."""
     import pinball_env  # noqa: F401  (registers the ids in this worker)
@@ -149,7 +149,7 @@ def init_ray(address: str | None = None, num_cpus: int | None = None) -> None:
             address=address, num_cpus=num_cpus if address is None else None,
             runtime_env=runtime_env, include_dashboard=False, log_to_driver=False,
         )  # fmt: skip
-    register_env(ENV_NAME, make_env)
+    register_env(ENV_NAME, make_rllib_env)
 
 
 def build(config: RllibConfig, local: bool = False) -> Any:

@@ -1,6 +1,6 @@
 """Whole games, their summary, and who plays them: the baselines (``random``, ``heuristic``) and
 trained agents (loaded by ``agents.policy.load_policy``), each as a policy over a VecEnv of the
-env chain (``agents.envs.make_env``)."""
+env chain (``agents.envs.make_env_chain``)."""
 
 import dataclasses
 import math
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import AnyConfig, ConfigError, TrainConfig, config_from_dict
-from agents.envs import make_env
+from agents.envs import make_env_chain
 from agents.policy import ObsNormalization, load_policy
 from pinball_env.players import HeuristicPolicy
 
@@ -118,7 +118,7 @@ def play_games(
 ) -> list[dict]:  # fmt: skip
     """``rollouts`` of ``player``, one game per seed, through the env chain of ``config`` (by
     default its own)."""
-    venv = make_env(config or player.config, num_envs=len(seeds), seed=seeds[0],
+    venv = make_env_chain(config or player.config, num_envs=len(seeds), seed=seeds[0],
                     frozen=player.normalization)  # fmt: skip
     rows = rollouts(venv, player.policy(venv, seeds[0]), seeds, layouts)
     venv.close()

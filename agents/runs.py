@@ -38,6 +38,7 @@ STATS_FILE = "vecnormalize.pkl"
 CHECKPOINTS = "checkpoints"
 PROGRESS_FILE = "progress.csv"
 VALIDATION_FILE = "validation.csv"
+BEST_MODEL = "best_model"  # the best validated model so far: best_model.zip
 # A checkpoint: step_N.zip (stable-baselines3) or the folder step_N (RLlib).
 CHECKPOINT_NAME = re.compile(r"step_(\d+)(\.zip)?")
 # The entry of a model zip that carries its config and observation statistics (agents.policy).

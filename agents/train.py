@@ -27,178 +27,36 @@ baselines and writes the report into the run folder (see ``agents.report``).
 Models are pickles inside zips: load only models you trust.
 """
 
-import collections
-import copy
-import csv
-import io
 import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from agents.cli import run_training, training_parser
 from agents.config import ConfigError, TrainConfig, algorithm_class, sb3_hyperparams
-from agents.envs import FrameCounter, make_env
-from agents.imitation import Anchor, imitate
-from agents.rollouts import model_policy, rollouts, summarize
+from agents.envs import make_env_chain
+from agents.imitation import KLAnchor, imitate
 from agents.runs import (
+    BEST_MODEL,
     CHECKPOINTS,
     MODEL_FILE,
     STATS_FILE,
     VALIDATION_FILE,
-    ProgressBar,
     StopRequest,
     TrainingInterrupted,
     atomic_write,
-    best_validation,
     keep_progress,
     latest_checkpoint,
-    next_multiple,
     read_meta,
     save_model,
     start_run,
     stats_for,
     stopped_before_learning,
-    validation_rows,
     write_meta,
 )
+from agents.validation import Validation
 
-BEST_MODEL = "best_model"
 WARM_START = "step_0"  # the checkpoint of a finished warm start
 MODEL_NAME = Path(MODEL_FILE).stem  # model.zip, model_vecnormalize.pkl
-
-
-class Validation:
-    """The validation games of a run: ``validate_episodes`` whole games from ``validate_seed``
-    on, the same games each time, played deterministically by the model being trained through
-    a copy of its env chain (``VecNormalize``'s statistics frozen at their current values).
-    Each result is a row of ``RUN/validation.csv``; the best model so far is kept as
-    ``RUN/best_model.zip`` (a resumed run goes on from the rows already written)."""
-
-    FIELDS = ("steps", "frames", "score_mean", "score_low", "score_high", "length_mean",
-              "truncated_share")  # fmt: skip
-
-    def __init__(self, config: TrainConfig, run: Path) -> None:
-        self.config, self.run = config, run
-        self.venv: Any = None
-        self.rows = validation_rows(run)  # a resumed run's so far
-
-    @property
-    def best(self) -> dict[str, Any] | None:
-        """The row of the best validation so far (the earliest of equals), or None."""
-        return best_validation(self.rows)
-
-    def __call__(self, model: Any, frames: int) -> dict[str, float]:
-        """Validate ``model`` (``frames`` played in training so far); returns its row."""
-        games = self.config.validation_seeds
-        if self.venv is None:
-            self.venv = make_env(self.config, num_envs=len(games), seed=games.start)
-        if hasattr(self.venv, "obs_rms"):
-            self.venv.obs_rms = copy.deepcopy(model.get_env().obs_rms)
-            self.venv.training = False  # (before the reset, which would update them)
-            self.venv.norm_reward = False
-        self.venv.seed(games.start)  # the same games every time
-        summary = summarize(rollouts(self.venv, model_policy(model), list(games)))
-        best = self.best
-        row = {
-            "steps": model.num_timesteps, "frames": frames,
-            "score_mean": round(summary["score_mean"], 2),
-            "score_low": round(summary["score_ci95"][0], 2),
-            "score_high": round(summary["score_ci95"][1], 2),
-            "length_mean": round(summary["length_mean"], 2),
-            "truncated_share": summary["truncated_share"],
-        }  # fmt: skip
-        if best is None or row["score_mean"] > best["score_mean"]:
-            save_model(model, self.run, BEST_MODEL, self.config)
-        self.rows.append(row)
-        table = io.StringIO()
-        writer = csv.DictWriter(table, fieldnames=self.FIELDS, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(self.rows)
-        atomic_write(self.run / VALIDATION_FILE, lambda file: file.write(table.getvalue().encode()))
-        print(
-            f"validation at {row['steps']} steps: score {row['score_mean']:.0f} (95% CI "
-            f"{row['score_low']:.0f}-{row['score_high']:.0f}) over {len(games)} games; best "
-            f"{self.best['score_mean']:.0f}"
-        )
-        return row
-
-    def close(self) -> None:
-        if self.venv is not None:
-            self.venv.close()
-
-
-def make_callback(
-    config: TrainConfig,
-    run: Path,
-    frames: int = 0,
-    started: float | None = None,
-    validation: Validation | None = None,
-    stop: StopRequest | None = None,
-    progress_bar: bool = False,
-    anchor: Anchor | None = None,
-) -> Any:
-    """Checkpoints every ``checkpoint_every`` env steps, ``validation`` every
-    ``validate_every`` (its score logged as ``validation/score_mean``), ``anchor``'s pull after
-    each update (on the rollout it learned from: taken at its end, pulled at the next start; the
-    KL before the pull logged as ``anchor/kl``), the mean game score of
-    the last 100 training games logged as ``rollout/ep_score_mean`` (the score, not the shaped
-    return), the frames played by all envs as ``time/frames`` (counted on from ``frames``), the
-    stop at ``max_minutes`` after ``started`` (``time.monotonic()``; default: when learning
-    starts) or when ``stop`` is asked, and a progress bar (see :class:`ProgressBar`)."""
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    validate_every = config.validate_every if validation else 0
-
-    class TrainingCallback(BaseCallback):
-        def __init__(self) -> None:
-            super().__init__()
-            self.scores: collections.deque = collections.deque(maxlen=100)
-            self.truncated: collections.deque = collections.deque(maxlen=100)
-
-        def _on_training_start(self) -> None:  # the next checkpoint and validation (0: none)
-            self.counter = FrameCounter(self.training_env, frames)
-            self.next_checkpoint = next_multiple(self.num_timesteps, config.checkpoint_every)
-            self.next_validation = next_multiple(self.num_timesteps, validate_every)
-            self.deadline = (started or time.monotonic()) + 60.0 * config.max_minutes
-            self.bar = ProgressBar(config, self.num_timesteps, self.deadline, progress_bar)
-
-        def _on_training_end(self) -> None:
-            self.bar.close()
-
-        def _on_rollout_start(self) -> None:  # (the update of the last rollout is done)
-            kl = anchor.pull(self.model.policy) if anchor else None
-            if kl is not None:
-                self.logger.record("anchor/kl", kl)
-
-        def _on_step(self) -> bool:
-            dones, infos = self.locals["dones"], self.locals["infos"]
-            for env in np.flatnonzero(dones):
-                self.scores.append(infos[env]["score"])
-                self.truncated.append(infos[env].get("TimeLimit.truncated", False))
-            if self.next_checkpoint and self.num_timesteps >= self.next_checkpoint:
-                save_model(self.model, run / CHECKPOINTS, f"step_{self.num_timesteps}", config)
-                self.next_checkpoint += config.checkpoint_every
-            if self.next_validation and self.num_timesteps >= self.next_validation:
-                row = validation(self.model, self.counter.frames)
-                self.logger.record("validation/score_mean", row["score_mean"])
-                self.next_validation += config.validate_every
-            self.bar.update(self.num_timesteps)
-            if config.total_frames and self.counter.frames >= config.total_frames:
-                return False
-            return not stop and (not config.max_minutes or time.monotonic() < self.deadline)
-
-        def _on_rollout_end(self) -> None:
-            if anchor:
-                anchor.remember(self.model.rollout_buffer.observations)
-            self.logger.record("time/frames", self.counter.frames)
-            if self.scores:
-                self.logger.record("rollout/ep_score_mean", float(np.mean(self.scores)))
-                self.logger.record("rollout/ep_truncated", float(np.mean(self.truncated)))
-                self.bar.score(float(np.mean(self.scores)))
-
-    return TrainingCallback()
 
 
 def set_threads(config: TrainConfig) -> None:
@@ -224,6 +82,8 @@ def _train(
 ) -> Path:
     from stable_baselines3.common.logger import configure
 
+    from agents.callbacks import TrainingCallbacks
+
     started = time.monotonic()
     set_threads(config)
     checkpoint = latest_checkpoint(run) if resume else None
@@ -243,17 +103,19 @@ def _train(
         save_model(model, run / CHECKPOINTS, WARM_START, config)
         record_trained(run, 0, frames)
     try:
-        anchor = _anchor(config, run, model)
+        kl_anchor = _kl_anchor(config, run, model)
     except ConfigError:
         venv.close()
         raise
     validation = Validation(config, run) if config.validate_every else None
-    callback = make_callback(config, run, frames, started, validation, stop, progress_bar, anchor)
+    callback = TrainingCallbacks(
+        config, run, frames, started, validation, stop, progress_bar, kl_anchor
+    )
     left = config.total_timesteps - model.num_timesteps
     if left > 0 and not stop:
         model.learn(left, callback=callback, reset_num_timesteps=not resume)
         # Where learning stopped (progress.csv's last row is the last whole rollout's).
-        record_trained(run, model.num_timesteps, callback.counter.frames)
+        record_trained(run, model.num_timesteps, callback.frames)
     # The last checkpoint is the final model, so a resume (after max_minutes) goes on from it.
     last = f"step_{model.num_timesteps}"
     save_model(model, run / CHECKPOINTS, last, config)
@@ -267,7 +129,7 @@ def _train(
     save_model(model, run, MODEL_NAME, config)
     if validation is not None:
         if not validation.rows or validation.rows[-1]["steps"] != model.num_timesteps:
-            validation(model, callback.counter.frames)
+            validation(model, callback.frames)
         validation.close()
         keep_best(run, validation.best)
     venv.close()
@@ -283,7 +145,7 @@ def _model(
     stats = stats_for(checkpoint[1]) if checkpoint else None
     if checkpoint and config.env.normalize and stats is None:
         raise ConfigError(f"{checkpoint[1]}: its VecNormalize statistics are missing")
-    venv = make_env(config, stats=stats, step_infos=False)
+    venv = make_env_chain(config, stats=stats, step_infos=False)
     if checkpoint is None:
         try:
             model = algorithm(
@@ -306,20 +168,21 @@ def _model(
     return venv, model, max(keep_progress(run), trained_frames(run))
 
 
-def _anchor(config: TrainConfig, run: Path, model: Any) -> Anchor | None:
-    """The pull towards the warm start (``anchor_coef``; None without one): the model's policy
+def _kl_anchor(config: TrainConfig, run: Path, model: Any) -> KLAnchor | None:
+    """The pull towards the warm start (``kl_anchor_coef``; None without one): the model's policy
     before it has learned (just fitted, or resumed from the warm start's checkpoint), else the
     warm start's checkpoint's."""
-    if not config.anchor_coef:
+    if not config.kl_anchor_coef:
         return None
     reference = model.policy
     if model.num_timesteps:
         path = run / CHECKPOINTS / f"{WARM_START}.zip"
         if not path.is_file():
-            raise ConfigError(f"{run}: anchor_coef needs the warm start's checkpoint {path}")
+            raise ConfigError(f"{run}: kl_anchor_coef needs the warm start's checkpoint {path}")
         reference = algorithm_class(config.algo).load(path, device=config.device).policy
     batch_size = getattr(model, "batch_size", None) or model.n_steps * model.n_envs
-    return Anchor(reference, config.anchor_coef, batch_size, config.seed, model.max_grad_norm)
+    coef = config.kl_anchor_coef
+    return KLAnchor(reference, coef, batch_size, config.seed, model.max_grad_norm)
 
 
 def clear_training_logs(run: Path) -> None:

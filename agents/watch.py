@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.config import AnyConfig
-from agents.envs import make_env
+from agents.envs import make_env_chain
 from agents.policy import ObsNormalization
 from agents.rollouts import VecPolicy
 
@@ -21,7 +21,7 @@ def record_video(
     ``make_policy(venv, seed)`` gives the player."""
     import imageio.v2 as imageio
 
-    venv = make_env(config, num_envs=1, seed=seed, frozen=stats, render=True)
+    venv = make_env_chain(config, num_envs=1, seed=seed, frozen=stats, render=True)
     act = make_policy(venv, seed)
     game = venv.get_attr("game")[0]
     fps = game.table.simulation.frame_rate  # every frame is recorded, those a step runs on too
@@ -62,7 +62,7 @@ def watch_games(
     table's frame rate. Closing the window or Ctrl-C stops."""
     from pinball_env.render import Window
 
-    venv = make_env(config, num_envs=1, seed=first, frozen=stats, render=True)
+    venv = make_env_chain(config, num_envs=1, seed=first, frozen=stats, render=True)
     act = make_policy(venv, first)
     game = venv.get_attr("game")[0]
     window = None

@@ -190,9 +190,11 @@ def sb3_model(config_path: Path) -> tuple[Any, Any]:
     ``agents.train`` does it (``load_config``, ``set_threads``: torch's threads are the
     config's; ``make_env``, training's chain; the algorithm with ``sb3_hyperparams``; no warm
     start, validation or checkpoints). ``agents`` is the tree's, beside its ``pinball_env``."""
+    from agents import envs
     from agents.config import algorithm_class, load_config, sb3_hyperparams
-    from agents.envs import make_env
     from agents.train import set_threads
+
+    make_env = getattr(envs, "make_env_chain", None) or envs.make_env  # older revisions' name
 
     config = load_config(config_path)
     set_threads(config)

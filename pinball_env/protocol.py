@@ -72,7 +72,7 @@ BOOTSTRAP_SEED = 0
 PROFILE_TAUS = np.linspace(-0.5, 2.5, 121)
 
 # Mean scores of random play (uniform actions) and of the heuristic
-# (pinball_env.heuristic.HeuristicPolicy) over EVAL_SEEDS under the protocol: the 0 and the 1 of
+# (pinball_env.players.HeuristicPolicy) over EVAL_SEEDS under the protocol: the 0 and the 1 of
 # normalised scores. Measured by ``python -m agents.benchmark --methods random-v2 heuristic-v2
 # random-v1 heuristic-v1 random-v0 heuristic-v0`` (benchmark.json, "reference_measured"); fixed
 # here so that every paper normalises alike. (Random play tilts Pinball-v2 in each ball's first

@@ -138,7 +138,7 @@ def default_table(env_id: str) -> str:
     return str(gym.spec(env_id).kwargs.get("table", "classic"))
 
 
-def make_env(
+def make_recorded_env(
     options: Mapping[str, Any], max_episode_steps: int | None = None, env_id: str = ENV_IDS[0]
 ) -> gym.Env:
     """The env a recording is played on: ``gym.make(env_id, **options)``, rendering frames."""
@@ -276,7 +276,7 @@ def replay(recording: Recording, viewer: Viewer | None = None) -> list[int]:
     RecordingError if the table or any game differs. ``viewer``: called before each step (the
     play tool's window shows the replay through it)."""
     try:
-        env = make_env(recording.options, recording.max_episode_steps, recording.env_id)
+        env = make_recorded_env(recording.options, recording.max_episode_steps, recording.env_id)
     except (TypeError, ValueError, OSError) as error:
         raise RecordingError(f"the recording's options do not make a game: {error}") from None
     try:

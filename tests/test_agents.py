@@ -15,7 +15,7 @@ import yaml
 
 from agents import evaluate, train
 from agents.config import ConfigError, load_config, sb3_hyperparams
-from agents.envs import make_env
+from agents.envs import make_env_chain
 from agents.imitation import discounted_returns, imitate, teacher_games
 from agents.policy import load_policy
 from agents.runs import atomic_write, latest_checkpoint, save_model
@@ -247,9 +247,11 @@ def test_report_writes_the_comparison_curve_and_game(tmp_path):
         (["imitation_steps=100", "algo=dqn", "hyperparams={}"], "needs an actor-critic"),
         (["imitation_steps=100", "env.kwargs.action_type=multibinary"], "needs discrete actions"),
         (["imitation_steps=100", "env.frame_stack=2"], "needs state observations"),
-        (["anchor_coef=-1"], "anchor_coef: must be a number >= 0"),
-        (["anchor_coef=nan", "imitation_steps=100"], "anchor_coef: must be a number >= 0"),
-        (["anchor_coef=0.5", "imitation_steps=0"], "anchor_coef: pulls towards a warm start"),
+        (["kl_anchor_coef=-1"], "kl_anchor_coef: must be a number >= 0"),
+        (["kl_anchor_coef=nan", "imitation_steps=100"], "kl_anchor_coef: must be a number >= 0"),
+        (["kl_anchor_coef=0.5", "imitation_steps=0"], "kl_anchor_coef: pulls towards a warm start"),
+        (["anchor_coef=0.5", "imitation_steps=0"], "kl_anchor_coef: pulls towards"),  # (old name)
+        (["anchor_coef=0.5", "kl_anchor_coef=0.5"], "anchor_coef is the old name of kl_anchor"),
         (["validate_every=-1"], "validate_every: must be an integer >= 0"),
         (["validate_every=9", "validate_episodes=0"], "validate_episodes: must be an integer >= 1"),
         (["validate_every=9", "validate_seed=31"], "validate_seed: 31 overlaps the training seeds"),
@@ -419,7 +421,7 @@ def test_validation_keeps_the_best_model_and_goes_on_after_a_resume(tmp_path, ca
     assert f"at {best['steps']} steps" in capsys.readouterr().out
     # The model replays its validation games through its saved chain, to the same scores.
     trained = load_policy(run)
-    venv = make_env(trained.config, num_envs=3, seed=300_000, frozen=trained.normalization)
+    venv = make_env_chain(trained.config, num_envs=3, seed=300_000, frozen=trained.normalization)
     replayed = evaluate.rollouts(
         venv, evaluate.model_policy(trained.model), [300_000, 300_001, 300_002]
     )
@@ -475,10 +477,10 @@ def test_the_warm_start_fits_the_heuristic_and_counts_in_the_budget(tmp_path):
 
     config = load_config(ROOT / "configs/agents/ppo.yaml",
                          ["env.num_envs=8", "env.kwargs.frame_skip=1"])  # fmt: skip
-    venv = make_env(config)
+    venv = make_env_chain(config)
     model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
     fit = imitate(model, venv, steps=8000, epochs=5, seed=0)
-    games = teacher_games(make_env(config), 1000)
+    games = teacher_games(make_env_chain(config), 1000)
     majority = np.bincount(games["actions"].ravel()).max() / games["actions"].size
     assert fit["steps"] == 8000 and fit["frames"] > fit["steps"]  # skip_above runs frames on
     assert fit["accuracy"] > majority + 0.03  # more than always pressing the usual buttons
@@ -497,7 +499,7 @@ def test_the_warm_start_fits_at_its_own_learning_rate():
     config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])  # (512 a batch)
     moves = []
     for learning_rate in (None, 1e-30):  # the algorithm's 3e-4, and a rate that moves nothing
-        venv = make_env(config)
+        venv = make_env_chain(config)
         model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
         before = [p.detach().clone() for p in model.policy.parameters()]
         imitate(model, venv, steps=256, epochs=1, seed=0, learning_rate=learning_rate)
@@ -508,17 +510,17 @@ def test_the_warm_start_fits_at_its_own_learning_rate():
 
 
 def test_the_anchor_pulls_a_drifted_policy_back_to_its_warm_start():
-    """Anchor: KL(warm start || policy) is 0 at the start, and each pull over a rollout's
+    """KLAnchor: KL(warm start || policy) is 0 at the start, and each pull over a rollout's
     states lowers it; the warm start it keeps is a frozen copy."""
     import torch
     from stable_baselines3 import PPO
 
-    from agents.imitation import Anchor
+    from agents.imitation import KLAnchor
 
     config = load_config(ROOT / "configs/agents/ppo.yaml", ["env.num_envs=4"])
-    venv = make_env(config)
+    venv = make_env_chain(config)
     model = PPO("MlpPolicy", venv, seed=0, device="cpu", **sb3_hyperparams(config))
-    anchor = Anchor(model.policy, coef=1.0, batch_size=64, seed=0)
+    anchor = KLAnchor(model.policy, coef=1.0, batch_size=64, seed=0)
     frozen = [p.detach().clone() for p in anchor.reference.parameters()]
     venv.reset()
     actions = [np.array([venv.action_space.sample()] * 4) for _ in range(64)]
@@ -543,10 +545,10 @@ def test_the_anchor_pulls_a_drifted_policy_back_to_its_warm_start():
 
 def test_a_warm_start_is_checkpointed_and_an_anchored_run_resumes_from_it(tmp_path, monkeypatch):
     """A finished warm start is checkpoint step_0 with its frames: a run killed after it goes on
-    from there without fitting again, its frames counted on; with anchor_coef, the pull's KL is
+    from there without fitting again, its frames counted on; with kl_anchor_coef, the pull's KL is
     logged and a resume takes the warm start from that checkpoint."""
     config = ROOT / "configs/agents/ppo.yaml"
-    run = tiny_run(config, tmp_path / "runs", "imitation_steps=64", "anchor_coef=1.0")
+    run = tiny_run(config, tmp_path / "runs", "imitation_steps=64", "kl_anchor_coef=1.0")
     assert (run / "checkpoints/step_0.zip").is_file()
     with open(run / "progress.csv") as file:
         rows = list(csv.DictReader(file))
@@ -577,7 +579,7 @@ def test_a_warm_start_is_checkpointed_and_an_anchored_run_resumes_from_it(tmp_pa
     assert latest_checkpoint(run)[0] >= 512  # (model.zip is the best validated)
     for path in (run / "checkpoints").glob("step_0*"):
         path.unlink()
-    with pytest.raises(ConfigError, match="anchor_coef needs the warm start's checkpoint"):
+    with pytest.raises(ConfigError, match="kl_anchor_coef needs the warm start's checkpoint"):
         train.train(load_config(run / "config.yaml", ["total_timesteps=1024"]), run, resume=True)
 
 

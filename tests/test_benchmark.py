@@ -14,13 +14,19 @@ import pytest
 import yaml
 
 import agents.train
-from agents import benchmark
+from agents.benchmark import cli, jobs, methods, results, shipping
 from agents.config import ConfigError, load_config
 from agents.evaluate import main as evaluate_main
 from agents.policy import load_policy
 from agents.runs import MODEL_FILE
 from pinball_env import protocol
-from pinball_env.recording import GameRecord, Recording, make_env, table_sha256, write_recording
+from pinball_env.recording import (
+    GameRecord,
+    Recording,
+    make_recorded_env,
+    table_sha256,
+    write_recording,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -30,7 +36,7 @@ pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("bench")
-    table = benchmark.main(["--tiny", "--out", str(out), "--methods", "random-v0", "ppo-v0",
+    table = cli.main(["--tiny", "--out", str(out), "--methods", "random-v0", "ppo-v0",
                             "--seeds", "0", "1", "--parallel", "2"])  # fmt: skip
     return out, table
 
@@ -40,13 +46,13 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
     assert set(table["methods"]) == {"random-v0", "ppo-v0"}
     ppo = table["methods"]["ppo-v0"]
     assert [run["seed"] for run in ppo["runs"]] == [0, 1]
-    assert ppo["games"] == 2 * benchmark.TINY_EPISODES and ppo["env_id"] == "Pinball-v0"
+    assert ppo["games"] == 2 * methods.TINY_EPISODES and ppo["env_id"] == "Pinball-v0"
     for run in ppo["runs"]:
-        assert run["frames"] >= benchmark.TINY_FRAMES  # trained to the budget, no further
-        assert run["frames"] < benchmark.TINY_FRAMES + 2 * 64 * 61  # (the rollout it stopped in)
+        assert run["frames"] >= methods.TINY_FRAMES  # trained to the budget, no further
+        assert run["frames"] < methods.TINY_FRAMES + 2 * 64 * 61  # (the rollout it stopped in)
         assert (out / run["run"] / MODEL_FILE).is_file()
         summary = json.loads((out / run["run"] / "protocol_eval" / "summary.json").read_text())
-        assert summary["seeds"] == [100_000, 100_000 + benchmark.TINY_EPISODES - 1]
+        assert summary["seeds"] == [100_000, 100_000 + methods.TINY_EPISODES - 1]
         assert summary["protocol"]["score_mean"] == run["score_mean"]
     pooled = np.concatenate([run["scores"] for run in ppo["runs"]])
     assert ppo["score_mean"] == pooled.mean() and ppo["score_iqm"] == protocol.iqm(pooled)
@@ -56,7 +62,7 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
     )
     saved = json.loads((out / "benchmark.json").read_text())
     assert saved["methods"]["ppo-v0"]["score_mean"] == ppo["score_mean"]
-    assert saved["methods"]["ppo-v0"]["training_frames"] == benchmark.TINY_FRAMES
+    assert saved["methods"]["ppo-v0"]["training_frames"] == methods.TINY_FRAMES
     assert saved["methods"]["random-v0"]["training_frames"] is None
     assert saved["protocol"]["repeat_action_probability"] == 0.25
     with open(out / "benchmark.csv") as file:
@@ -69,19 +75,19 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
 
 
 def test_a_method_on_the_long_budget_trains_its_config_ten_times_as_long(tmp_path):
-    settings = benchmark.Settings(tmp_path)
-    short = benchmark.job_config("ppo-scale-v2", 3, settings)
-    long = benchmark.job_config("ppo-scale-v2-200m", 3, settings)
-    assert benchmark.METHODS["ppo-scale-v2-200m"].config == benchmark.METHODS["ppo-scale-v2"].config
+    settings = jobs.Settings(tmp_path)
+    short = jobs.job_config("ppo-scale-v2", 3, settings)
+    long = jobs.job_config("ppo-scale-v2-200m", 3, settings)
+    assert methods.METHODS["ppo-scale-v2-200m"].config == methods.METHODS["ppo-scale-v2"].config
     assert (short.total_frames, long.total_frames) == protocol.TRAINING_BUDGETS
     assert long.total_frames == protocol.LONG_TRAINING_FRAMES == 200_000_000
-    for key in benchmark.SCALED_BY_BUDGET:  # the schedules and validations spread as far
+    for key in methods.SCALED_BY_BUDGET:  # the schedules and validations spread as far
         assert getattr(long, key) == 10 * getattr(short, key), key
     # What trains is otherwise the same config: its digest differs only by those keys.
-    scaled = {key: getattr(short, key) for key in ("total_frames", *benchmark.SCALED_BY_BUDGET)}
+    scaled = {key: getattr(short, key) for key in ("total_frames", *methods.SCALED_BY_BUDGET)}
     assert dataclasses.replace(long, **scaled) == short
     with pytest.raises(ValueError, match="not a budget of the protocol"):
-        benchmark.Method("Pinball-v2", "ppo_scale_v2.yaml", frames=50_000_000)
+        methods.Method("Pinball-v2", "ppo_scale_v2.yaml", frames=50_000_000)
 
 
 def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
@@ -93,14 +99,14 @@ def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
     (run / MODEL_FILE).unlink()
     for path in (run / "protocol_eval").iterdir():
         path.unlink()
-    again = benchmark.main(["--tiny", "--out", str(out), "--methods", "random-v0", "ppo-v0",
+    again = cli.main(["--tiny", "--out", str(out), "--methods", "random-v0", "ppo-v0",
                             "--seeds", "0", "1"])  # fmt: skip
     assert (run / MODEL_FILE).is_file() and (run / "progress_0.csv").is_file()
     first = out / table["methods"]["ppo-v0"]["runs"][0]["run"] / MODEL_FILE
     assert first.stat().st_mtime_ns == first_model.st_mtime_ns
     assert again["methods"]["ppo-v0"]["runs"][0] == table["methods"]["ppo-v0"]["runs"][0]
     # Fewer games: the evaluations are played again, the training is not.
-    fewer = benchmark.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0",
+    fewer = cli.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0",
                             "--episodes", "2"])  # fmt: skip
     assert fewer["methods"]["ppo-v0"]["games"] == 2
     assert first.stat().st_mtime_ns == first_model.st_mtime_ns
@@ -108,9 +114,9 @@ def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
 
 def test_a_stopped_jobs_minutes_count_in_its_run(tiny, monkeypatch):
     out, _ = tiny
-    settings = benchmark.Settings(out, episodes=benchmark.TINY_EPISODES, tiny=True)
-    record = benchmark.job_folder(settings, "ppo-v0", 1) / benchmark.JOB_FILE
-    (benchmark.job_run("ppo-v0", 1, settings) / MODEL_FILE).unlink()
+    settings = jobs.Settings(out, episodes=methods.TINY_EPISODES, tiny=True)
+    record = jobs.job_folder(settings, "ppo-v0", 1) / jobs.JOB_FILE
+    (jobs.job_run("ppo-v0", 1, settings) / MODEL_FILE).unlink()
     before = json.loads(record.read_text())["train_seconds"]
     real_train = agents.train.train
 
@@ -120,7 +126,7 @@ def test_a_stopped_jobs_minutes_count_in_its_run(tiny, monkeypatch):
 
     monkeypatch.setattr(agents.train, "train", stopped)
     with pytest.raises(KeyboardInterrupt):
-        benchmark.run_job("ppo-v0", 1, settings)
+        jobs.run_job("ppo-v0", 1, settings)
     after_stop = json.loads(record.read_text())["train_seconds"]
     assert after_stop >= before + 0.19  # (rounded to a thousandth)
 
@@ -129,19 +135,19 @@ def test_a_stopped_jobs_minutes_count_in_its_run(tiny, monkeypatch):
         return real_train(*args, **kwargs)
 
     monkeypatch.setattr(agents.train, "train", slow)
-    benchmark.run_job("ppo-v0", 1, settings)  # goes on from its checkpoint: its minutes add up
+    jobs.run_job("ppo-v0", 1, settings)  # goes on from its checkpoint: its minutes add up
     assert json.loads(record.read_text())["train_seconds"] >= after_stop + 0.19
-    assert (benchmark.job_run("ppo-v0", 1, settings) / MODEL_FILE).is_file()
+    assert (jobs.job_run("ppo-v0", 1, settings) / MODEL_FILE).is_file()
 
 
 def test_a_run_stopped_before_its_first_checkpoint_starts_again(tiny):
     out, _ = tiny
-    settings = benchmark.Settings(out, episodes=2, tiny=True)
-    run = benchmark.job_run("ppo-v0", 0, settings)
+    settings = jobs.Settings(out, episodes=2, tiny=True)
+    run = jobs.job_run("ppo-v0", 0, settings)
     shutil.rmtree(run / "checkpoints")  # as if killed in its warm start
     (run / MODEL_FILE).unlink()
-    benchmark.run_job("ppo-v0", 0, settings)
-    again = benchmark.job_run("ppo-v0", 0, settings)
+    jobs.run_job("ppo-v0", 0, settings)
+    again = jobs.job_run("ppo-v0", 0, settings)
     assert (again / MODEL_FILE).is_file() and not (again / "progress_0.csv").exists()
 
 
@@ -149,12 +155,12 @@ def test_runs_of_an_earlier_benchmark_are_merged_not_trained_again(tiny, tmp_pat
     out, _ = tiny
     names = ["--methods", "random-v0", "ppo-v0", "--seeds", "0", "1"]
     # (the fixture's runs evaluated on its games again, whichever tests ran before)
-    earlier = benchmark.main(["--tiny", "--out", str(out), *names])
+    earlier = cli.main(["--tiny", "--out", str(out), *names])
     published = tmp_path / "published.json"
     shutil.copyfile(out / "benchmark.json", published)
     here = tmp_path / "here"
     shutil.copytree(out / "ppo-v0" / "seed1", here / "ppo-v0" / "seed1")  # one run here
-    table = benchmark.main(["--tiny", "--out", str(here), *names, "--merge", str(published)])
+    table = cli.main(["--tiny", "--out", str(here), *names, "--merge", str(published)])
     assert sorted(p.name for p in here.iterdir() if p.is_dir()) == ["ppo-v0"]  # none played
     assert sorted(p.name for p in (here / "ppo-v0").iterdir()) == ["seed1"]  # none trained
     for name in ("random-v0", "ppo-v0"):
@@ -169,22 +175,22 @@ def test_runs_of_an_earlier_benchmark_are_merged_not_trained_again(tiny, tmp_pat
 
 def test_an_earlier_benchmark_of_another_protocol_or_config_is_refused(tiny, tmp_path):
     out, _ = tiny
-    benchmark.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0"])
+    cli.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0"])
     table = json.loads((out / "benchmark.json").read_text())
-    settings, path = benchmark.Settings(tmp_path, episodes=2, tiny=True), tmp_path / "b.json"
+    settings, path = jobs.Settings(tmp_path, episodes=2, tiny=True), tmp_path / "b.json"
     path.write_text(json.dumps(table))
     with pytest.raises(ConfigError, match=r"another protocol .*eval_seeds: \[100000, 100002\]"):
-        benchmark.merged_runs([path], ["ppo-v0"], settings)
-    settings = benchmark.Settings(tmp_path, benchmark.TINY_EPISODES, tiny=True)
-    assert len(benchmark.merged_runs([path], ["ppo-v0"], settings)["ppo-v0"]) == 1
+        results.merged_runs([path], ["ppo-v0"], settings)
+    settings = jobs.Settings(tmp_path, methods.TINY_EPISODES, tiny=True)
+    assert len(results.merged_runs([path], ["ppo-v0"], settings)["ppo-v0"]) == 1
     table["methods"]["ppo-v0"]["runs"][0]["config_digest"] = "0" * 16  # its config since changed
     path.write_text(json.dumps(table))
     with pytest.raises(ConfigError, match="ppo-v0 seed 0 was trained by another config"):
-        benchmark.merged_runs([path], ["ppo-v0"], settings)
-    assert benchmark.merged_runs([path], ["random-v0"], settings) == {}  # (not asked for)
+        results.merged_runs([path], ["ppo-v0"], settings)
+    assert results.merged_runs([path], ["random-v0"], settings) == {}  # (not asked for)
     path.write_text("[1, 2]")
     with pytest.raises(ConfigError, match=r"not a benchmark\.json"):
-        benchmark.merged_runs([path], ["ppo-v0"], settings)
+        results.merged_runs([path], ["ppo-v0"], settings)
 
 
 PUBLISHED = Path(__file__).resolve().parent.parent / "docs" / "benchmark.json"
@@ -193,16 +199,16 @@ PUBLISHED = Path(__file__).resolve().parent.parent / "docs" / "benchmark.json"
 def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path):
     published = json.loads(PUBLISHED.read_text())
     # Refused if the protocol or a method's config has changed since its runs were trained.
-    merged = benchmark.merged_runs([PUBLISHED], list(published["methods"]),
-                                   benchmark.Settings(tmp_path))  # fmt: skip
+    merged = results.merged_runs([PUBLISHED], list(published["methods"]),
+                                   jobs.Settings(tmp_path))  # fmt: skip
     assert merged.keys() == published["methods"].keys()
     for name, result in published["methods"].items():
         runs = result["runs"]
         assert [run["scores"] for run in merged[name]] == [run["scores"] for run in runs]
         assert all(len(run["scores"]) == len(protocol.EVAL_SEEDS) for run in runs)
-        if benchmark.METHODS[name].trained:
+        if methods.METHODS[name].trained:
             assert len(runs) >= 3 and all(run["commit"] for run in runs)
-            budget = benchmark.METHODS[name].frames
+            budget = methods.METHODS[name].frames
             assert all(run["frames"] >= 0.99 * budget for run in runs)
         # Its metrics are those of its scores.
         metrics = protocol.aggregate([run["scores"] for run in runs], result["env_id"])
@@ -212,7 +218,7 @@ def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path
 
 def test_tiny_runs_do_not_ship():
     with pytest.raises(SystemExit):
-        benchmark.main(["--tiny", "--out", "/nonexistent", "--methods", "ppo-v0", "--table-only",
+        cli.main(["--tiny", "--out", "/nonexistent", "--methods", "ppo-v0", "--table-only",
                         "--ship", "ppo-v0"])  # fmt: skip
 
 
@@ -220,49 +226,49 @@ def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, m
     out = tmp_path / "bench"
     shutil.copytree(tiny[0], out)
     # (both runs evaluated on the same games, whichever tests ran before)
-    benchmark.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0", "1",
+    cli.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0", "1",
                     "--episodes", "2"])  # fmt: skip
-    settings = benchmark.Settings(out, episodes=2, tiny=True)
+    settings = jobs.Settings(out, episodes=2, tiny=True)
     monkeypatch.setattr(protocol, "TRAINING_SEEDS", (0, 1))  # (two tiny runs stand for five)
     for seed, validated in ((0, 900.0), (1, 400.0)):  # seed 0 validated better
-        run = benchmark.job_run("ppo-v0", seed, settings)
+        run = jobs.job_run("ppo-v0", seed, settings)
         (run / "validation.csv").write_text(f"steps,frames,score_mean\n64,3000,{validated}\n")
     into = tmp_path / "pretrained"
-    model = benchmark.ship("ppo-v0", [0, 1], settings, "best-v0", into)
+    model = shipping.ship("ppo-v0", [0, 1], settings, "best-v0", into)
     card = json.loads((into / "best-v0.json").read_text())
-    chosen = benchmark.job_run("ppo-v0", 0, settings)
+    chosen = jobs.job_run("ppo-v0", 0, settings)
     assert model == into / "best-v0.zip"
     assert model.read_bytes() == (chosen / MODEL_FILE).read_bytes()
     assert card["name"] == "best-v0" and card["method"] == "ppo-v0" and card["seed"] == 0
     assert card["chosen_by"] == "the best validation score of 2 seeds (900)"
     with open(chosen / "protocol_eval" / "episodes.csv") as file:
         scores = [int(row["score"]) for row in csv.DictReader(file)]
-    assert card["check_games"]["scores"] == scores[: benchmark.CHECK_GAMES]
+    assert card["check_games"]["scores"] == scores[: shipping.CHECK_GAMES]
     assert card["load"] == 'agents.policy.load_policy("pretrained:best-v0")'
     assert load_policy(str(model)).env_id == "Pinball-v0"  # the zip carries its config
     # Runs published elsewhere count in the choice; the chosen one ships from a run here.
-    benchmark.aggregate_table(["ppo-v0"], [0, 1], settings)
-    here = benchmark.Settings(tmp_path / "here", episodes=2, tiny=True)
+    results.aggregate_table(["ppo-v0"], [0, 1], settings)
+    here = jobs.Settings(tmp_path / "here", episodes=2, tiny=True)
     shutil.copytree(out / "ppo-v0" / "seed1", here.out / "ppo-v0" / "seed1")
-    merged = benchmark.merged_runs([out / "benchmark.json"], ["ppo-v0"], here)
+    merged = results.merged_runs([out / "benchmark.json"], ["ppo-v0"], here)
     with pytest.raises(ConfigError, match=r"best run, seed 0 .*\(900\).*\(--seeds 0\)"):
-        benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
+        shipping.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
     # ... or, asked to, the best of the runs here, the card saying what was better.
-    benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged, from_out=True)
+    shipping.ship("ppo-v0", [0, 1], here, "best-v0", into, merged, from_out=True)
     card = json.loads((into / "best-v0.json").read_text())
     assert card["seed"] == 1 and card["chosen_by"] == (
         "the best validation score of the 1 of 2 seeds whose models are here (400; "
         "seed 0's model, 900, was not kept)"
     )
-    run = benchmark.job_run("ppo-v0", 1, here)
+    run = jobs.job_run("ppo-v0", 1, here)
     (run / "validation.csv").write_text("steps,frames,score_mean\n64,3000,1000\n")
-    benchmark.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
+    shipping.ship("ppo-v0", [0, 1], here, "best-v0", into, merged)
     card = json.loads((into / "best-v0.json").read_text())
     assert card["seed"] == 1 and card["chosen_by"].endswith("of 2 seeds (1000)")
     # A method with a seed short of the runs asked for does not ship.
     monkeypatch.setattr(protocol, "TRAINING_SEEDS", (0, 1, 2))
     with pytest.raises(ConfigError, match=r"ships the best of at least 3 runs .* 2 are done"):
-        benchmark.ship("ppo-v0", [0, 1, 2], settings, "best-v0", into)
+        shipping.ship("ppo-v0", [0, 1, 2], settings, "best-v0", into)
 
 
 @pytest.mark.parametrize(
@@ -272,31 +278,31 @@ def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, m
 )  # fmt: skip
 def test_a_bad_ship_is_refused_with_what_is_wrong(text, error):
     with pytest.raises(ConfigError, match=error):
-        benchmark.parse_ship(text)
-    assert benchmark.parse_ship("ppo-finetune-v1=ppo-v1") == ("ppo-finetune-v1", "ppo-v1")
-    assert benchmark.parse_ship("ppo-v0") == ("ppo-v0", "ppo-v0")
+        shipping.parse_ship(text)
+    assert shipping.parse_ship("ppo-finetune-v1=ppo-v1") == ("ppo-finetune-v1", "ppo-v1")
+    assert shipping.parse_ship("ppo-v0") == ("ppo-v0", "ppo-v0")
 
 
 def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
     out, _ = tiny
-    run = benchmark.job_run("ppo-v0", 0, benchmark.Settings(out, tiny=True))
+    run = jobs.job_run("ppo-v0", 0, jobs.Settings(out, tiny=True))
     copy = tmp_path / "ppo-v0" / "seed0" / run.name
     copy.mkdir(parents=True)
     text = (run / "config.yaml").read_text().replace("total_frames: 3000", "total_frames: 4000")
     (copy / "config.yaml").write_text(text)
-    settings = benchmark.Settings(tmp_path, tiny=True)
+    settings = jobs.Settings(tmp_path, tiny=True)
     with pytest.raises(ConfigError, match=r"than ppo-v0 seed 0 .*total_frames: 4000"):
-        benchmark.job_run("ppo-v0", 0, settings)
+        jobs.job_run("ppo-v0", 0, settings)
     # Its notes reworded since: the same training.
     data = yaml.safe_load((run / "config.yaml").read_text())
     data["notes"] = f"Reworded. {data['notes']}"
     (copy / "config.yaml").write_text(yaml.safe_dump(data))
-    assert benchmark.job_run("ppo-v0", 0, settings) == copy
+    assert jobs.job_run("ppo-v0", 0, settings) == copy
 
 
 def protocol_recording(path: Path, options: dict, seeds: list[int]) -> list[int]:
     """Write a play-tool recording of random play of Pinball-v0 with ``options``."""
-    env = make_env(options, 7200, "Pinball-v0")
+    env = make_recorded_env(options, 7200, "Pinball-v0")
     rng = np.random.default_rng(0)
     games = []
     for seed in seeds:
@@ -363,7 +369,8 @@ def test_the_protocol_evaluation_plays_sticky_held_out_games(tmp_path):
 
 def test_a_key_added_later_leaves_the_digest_of_configs_at_its_default():
     config = load_config(ROOT / "configs/agents/ppo_close_v1.yaml")
-    assert set(benchmark.LATER_KEYS) <= set(config.to_dict())
-    anchored = dataclasses.replace(config, anchor_coef=1.0)
-    assert "anchor_coef" not in benchmark._trained_by(config)
-    assert benchmark.config_digest(anchored) != benchmark.config_digest(config)
+    assert set(methods.LATER_KEYS) <= set(config.to_dict())
+    anchored = dataclasses.replace(config, kl_anchor_coef=1.0)
+    assert "anchor_coef" not in methods.trained_by(config)
+    assert "kl_anchor_coef" not in methods.trained_by(config)
+    assert methods.config_digest(anchored) != methods.config_digest(config)

@@ -85,8 +85,8 @@ def test_a_config_checks_its_env_options_without_building_an_env(monkeypatch):
 
 def test_the_documented_imports_still_work():
     from pinball_env.game import Game
-    from pinball_env.heuristic import HeuristicPolicy
     from pinball_env.physics import step_world, sweep_circle_segment
+    from pinball_env.players import HeuristicPolicy
     from pinball_env.procgen import generate_table
     from pinball_env.sim import World
     from pinball_env.table import TableError, dump_table, load_table

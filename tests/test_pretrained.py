@@ -6,8 +6,16 @@ from pathlib import Path
 import pytest
 
 from agents.config import ConfigError
-from agents.policy import PRETRAINED, load_policy, pretrained_card
-from agents.report import evaluate
+from agents.evaluation import evaluate_protocol, player_for
+from agents.policy import (
+    PRETRAINED,
+    PRETRAINED_ALIASES,
+    PRETRAINED_DIR,
+    PRETRAINED_PREFIX,
+    load_policy,
+    pretrained_card,
+    resolve_model_path,
+)
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -16,14 +24,24 @@ def test_the_best_ppo_agents_ship():
     assert {"ppo-v0", "ppo-v1"} <= set(PRETRAINED)
 
 
+def test_each_agent_ships_under_its_methods_name_and_its_old_name_still_loads_it():
+    for model in PRETRAINED_DIR.glob("*.zip"):
+        card = pretrained_card(model.stem)
+        assert card["name"] == card["method"] == model.stem
+    for alias, name in PRETRAINED_ALIASES.items():
+        assert not (PRETRAINED_DIR / f"{alias}.zip").exists()  # (one file, one name)
+        assert resolve_model_path(PRETRAINED_PREFIX + alias) == PRETRAINED_DIR / f"{name}.zip"
+        assert pretrained_card(alias) == pretrained_card(name)
+
+
 @pytest.mark.parametrize("name", PRETRAINED)
 def test_a_pretrained_agent_scores_as_its_card_says(name, tmp_path):
     card = pretrained_card(name)
     policy = load_policy(f"pretrained:{name}")
     assert policy.env_id == card["env_id"] and policy.config.seed == card["seed"]
     games = card["check_games"]
-    summary = evaluate(model_path=f"pretrained:{name}", episodes=len(games["seeds"]),
-                       protocol=True, out=tmp_path)  # fmt: skip
+    player = player_for(model_path=f"pretrained:{name}")
+    summary = evaluate_protocol(player, tmp_path, episodes=len(games["seeds"]))
     assert summary["seeds"] == [games["seeds"][0], games["seeds"][-1]]
     scores = [int(line.split(",")[1]) for line in
               (tmp_path / "episodes.csv").read_text().splitlines()[1:]]  # fmt: skip

@@ -170,7 +170,9 @@ def test_the_policy_sees_observations_as_training_normalised_them(tmp_path, no_r
 
 
 def test_each_env_runner_plays_its_own_block_of_seeds():
-    env = rllib.make_env({"id": "Pinball-v0", "seed": 10, "num_envs": 4, "max_episode_steps": None})
+    env = rllib.make_rllib_env(
+        {"id": "Pinball-v0", "seed": 10, "num_envs": 4, "max_episode_steps": None}
+    )
     assert type(env.unwrapped).__name__ == "PinballVectorEnv"  # the native vector env
     seen = []
     reset = env.env.reset
@@ -288,7 +290,8 @@ def test_a_signal_saves_a_checkpoint_and_says_how_to_resume(tmp_path):
 def test_the_benchmark_sends_each_job_to_a_worker_node_and_gathers_its_folder(tmp_path, no_ray):
     from ray.cluster_utils import Cluster
 
-    from agents import benchmark
+    from agents.benchmark.cli import main as benchmark_main
+    from agents.benchmark.jobs import JOB_FILE
 
     # The head node has no CPU: every job runs on the worker, in its scratch folder, and only
     # what comes back lands in OUT.
@@ -297,7 +300,7 @@ def test_the_benchmark_sends_each_job_to_a_worker_node_and_gathers_its_folder(tm
     try:
         cluster.wait_for_nodes()
         jobs = ["--methods", "random-v0", "ppo-v0", "--seeds", "0", "1"]
-        table = benchmark.main(["--tiny", "--address", cluster.address, "--out", str(tmp_path),
+        table = benchmark_main(["--tiny", "--address", cluster.address, "--out", str(tmp_path),
                                 *jobs])  # fmt: skip
     finally:
         ray.shutdown()
@@ -306,7 +309,7 @@ def test_the_benchmark_sends_each_job_to_a_worker_node_and_gathers_its_folder(tm
     assert [run["seed"] for run in ppo["runs"]] == [0, 1]
     for folder in (tmp_path / "ppo-v0" / "seed0", tmp_path / "ppo-v0" / "seed1",
                    tmp_path / "random-v0"):  # fmt: skip
-        assert json.loads((folder / benchmark.JOB_FILE).read_text())["node"] == worker.node_id
+        assert json.loads((folder / JOB_FILE).read_text())["node"] == worker.node_id
     for run in ppo["runs"]:
         assert (tmp_path / run["run"] / "model.zip").is_file()
         assert (tmp_path / run["run"] / "protocol_eval" / "episodes.csv").is_file()

@@ -59,7 +59,7 @@ from pinball_env.recording import (
     encode_action,
     format_version,
     load_recording,
-    make_env,
+    make_recorded_env,
     table_sha256,
     write_recording,
 )
@@ -255,7 +255,7 @@ class PlayLoop:
             known = ", ".join(ENV_IDS[:-1]) + f" or {ENV_IDS[-1]}"
             raise ValueError(f"the play tool plays {known}, not {env_id!r}")
         self.options = {"table": default_table(env_id), **(options or {})}
-        self.env = make_env(self.options, env_id=env_id)
+        self.env = make_recorded_env(self.options, env_id=env_id)
         self.screen = _Screen(self.env, fps, "Pinball")
         self._pygame = self.screen.pygame
         game = self.env.unwrapped.game
