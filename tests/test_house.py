@@ -47,9 +47,9 @@ def test_the_table_imports_only_physics_and_itself(path):
 # package itself (its version, its registration of the envs).
 BELOW_TOOLS = {
     "physics": (),
-    "checks.py": (),
+    "checks.py": ("table",),  # the kinds of value are the table's (table/fields.py)
     "extras.py": (),
-    "protocol.py": (),
+    "protocol.py": ("options",),  # the protocol's game is options' GAME_FRAMES
     "table": ("physics",),
     "sim": ("physics", "table", "extras"),
     "procgen": ("physics", "table", "sim"),  # its playability check plays balls on a World
