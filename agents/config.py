@@ -14,7 +14,6 @@ RLlib run (``agents.rllib``); both share :class:`EnvConfig` and the checks of th
 import copy
 import dataclasses
 import inspect
-import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -24,6 +23,7 @@ from typing import Any
 import gymnasium as gym
 import yaml
 
+from pinball_env.checks import is_finite, is_flag, is_int, is_real
 from pinball_env.extras import missing_message
 from pinball_env.game import check_playable
 from pinball_env.options import GAME_FRAMES, PinballOptions
@@ -328,7 +328,7 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
     integer("total_timesteps", config.total_timesteps, 1)
     integer("seed", config.seed, 0)
     minutes = config.max_minutes
-    if isinstance(minutes, bool) or not isinstance(minutes, (int, float)) or not 0 <= minutes < 1e6:
+    if not is_real(minutes) or not 0 <= minutes < 1e6:
         fail("max_minutes", f"must be a number of minutes >= 0, got {minutes!r}")
     if isinstance(config, TrainConfig):
         integer("total_frames", config.total_frames, 0)
@@ -338,7 +338,7 @@ def check_config(config: AnyConfig, source: str = "<config>") -> None:
     integer("eval_seed", config.eval_seed, 0)
     integer("env.num_envs", config.env.num_envs, 1)
     integer("env.frame_stack", config.env.frame_stack, 1)
-    if not isinstance(config.env.normalize, bool):
+    if not is_flag(config.env.normalize):
         fail("env.normalize", f"must be true or false, got {config.env.normalize!r}")
     if not isinstance(config.notes, str):
         fail("notes", "must be text")
@@ -368,7 +368,7 @@ def protocol_config(config: AnyConfig) -> AnyConfig:
 
 
 def _check_integer(fail: Callable[[str, str], None], key: str, value: Any, low: int) -> None:
-    if not isinstance(value, int) or isinstance(value, bool) or value < low:
+    if not is_int(value) or value < low:
         fail(key, f"must be an integer >= {low}, got {value!r}")
 
 
@@ -465,7 +465,7 @@ def _check_rllib(config: RllibConfig, fail: Callable[[str, str], None]) -> None:
     if config.algo != "ppo":
         fail("algo", f"unknown algorithm {config.algo!r} (RLlib runs ship PPO only)")
     cpus = config.cpus_per_env_runner
-    if isinstance(cpus, bool) or not isinstance(cpus, (int, float)) or not 0 < cpus <= 1024:
+    if not is_real(cpus) or not 0 < cpus <= 1024:
         fail("cpus_per_env_runner", f"must be a number of CPUs > 0, got {cpus!r}")
     try:
         from ray.rllib.algorithms.algorithm_config import AlgorithmConfig
@@ -493,7 +493,7 @@ def _check_options(
     for name, value in options.items():
         if name not in taken:
             fail(f"{key}.{name}", f"not an option of {owner}")
-        if isinstance(value, float) and not math.isfinite(value):
+        if is_real(value) and not is_finite(value):
             fail(f"{key}.{name}", f"must be finite, got {value!r}")
 
 
@@ -513,8 +513,7 @@ def _check_env(env: EnvConfig, fail: Callable[[str, str], None]) -> None:
         if key in FORBIDDEN_ENV_KWARGS or key not in options | set(VECTOR_ONLY_KWARGS):
             fail(f"env.kwargs.{key}", f"not a training option of {env.id}")
     steps = env.kwargs.get("max_episode_steps", 1)
-    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
-        fail("env.kwargs.max_episode_steps", f"must be an integer >= 1, got {steps!r}")
+    _check_integer(fail, "env.kwargs.max_episode_steps", steps, 1)
     kwargs = {k: v for k, v in env.kwargs.items() if k not in VECTOR_ONLY_KWARGS}
     try:
         game = PinballOptions(**{**spec.kwargs, **kwargs})
@@ -542,12 +541,7 @@ def linear_start(text: str) -> float | None:
 
 def _positive(value: Any) -> bool:
     """A finite number > 0 (a bool is not a number here)."""
-    return (
-        not isinstance(value, bool)
-        and isinstance(value, (int, float))
-        and math.isfinite(value)
-        and value > 0
-    )
+    return is_finite(value) and value > 0
 
 
 def sb3_hyperparams(config: TrainConfig) -> dict[str, Any]:

@@ -14,7 +14,7 @@ import numpy as np
 from agents.config import AnyConfig, ConfigError, TrainConfig, config_from_dict
 from agents.envs import make_env_chain
 from agents.policy import ObsNormalization, load_policy
-from pinball_env.players import HeuristicPolicy
+from pinball_env.players import HeuristicPolicy, RandomPolicy
 
 BASELINES = ("random", "heuristic")
 # The baselines play frame by frame, on the model's table (or layouts) with the default rewards.
@@ -59,9 +59,8 @@ def baseline_policy(name: str, venv: Any, seed: int) -> VecPolicy:
     """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
     n = venv.num_envs
     if name == "random":
-        rng = np.random.default_rng(seed)
-        space = venv.action_space
-        return lambda obs, infos: rng.integers(0, space.n, size=n)
+        player = RandomPolicy(venv.action_space.n, seed)
+        return lambda obs, infos: player(n)
     players = HeuristicPlayers(venv.get_attr("game")[0].world)
 
     def heuristic(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:

@@ -75,7 +75,7 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
 
 
 def test_a_method_on_the_long_budget_trains_its_config_ten_times_as_long(tmp_path):
-    settings = jobs.Settings(tmp_path)
+    settings = jobs.JobSettings(tmp_path)
     short = jobs.job_config("ppo-scale-v2", 3, settings)
     long = jobs.job_config("ppo-scale-v2-200m", 3, settings)
     assert methods.METHODS["ppo-scale-v2-200m"].config == methods.METHODS["ppo-scale-v2"].config
@@ -114,7 +114,7 @@ def test_finished_jobs_are_reused_and_a_partial_run_goes_on(tiny):
 
 def test_a_stopped_jobs_minutes_count_in_its_run(tiny, monkeypatch):
     out, _ = tiny
-    settings = jobs.Settings(out, episodes=methods.TINY_EPISODES, tiny=True)
+    settings = jobs.JobSettings(out, episodes=methods.TINY_EPISODES, tiny=True)
     record = jobs.job_folder(settings, "ppo-v0", 1) / jobs.JOB_FILE
     (jobs.job_run("ppo-v0", 1, settings) / MODEL_FILE).unlink()
     before = json.loads(record.read_text())["train_seconds"]
@@ -142,7 +142,7 @@ def test_a_stopped_jobs_minutes_count_in_its_run(tiny, monkeypatch):
 
 def test_a_run_stopped_before_its_first_checkpoint_starts_again(tiny):
     out, _ = tiny
-    settings = jobs.Settings(out, episodes=2, tiny=True)
+    settings = jobs.JobSettings(out, episodes=2, tiny=True)
     run = jobs.job_run("ppo-v0", 0, settings)
     shutil.rmtree(run / "checkpoints")  # as if killed in its warm start
     (run / MODEL_FILE).unlink()
@@ -177,11 +177,11 @@ def test_an_earlier_benchmark_of_another_protocol_or_config_is_refused(tiny, tmp
     out, _ = tiny
     cli.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0"])
     table = json.loads((out / "benchmark.json").read_text())
-    settings, path = jobs.Settings(tmp_path, episodes=2, tiny=True), tmp_path / "b.json"
+    settings, path = jobs.JobSettings(tmp_path, episodes=2, tiny=True), tmp_path / "b.json"
     path.write_text(json.dumps(table))
     with pytest.raises(ConfigError, match=r"another protocol .*eval_seeds: \[100000, 100002\]"):
         results.merged_runs([path], ["ppo-v0"], settings)
-    settings = jobs.Settings(tmp_path, methods.TINY_EPISODES, tiny=True)
+    settings = jobs.JobSettings(tmp_path, methods.TINY_EPISODES, tiny=True)
     assert len(results.merged_runs([path], ["ppo-v0"], settings)["ppo-v0"]) == 1
     table["methods"]["ppo-v0"]["runs"][0]["config_digest"] = "0" * 16  # its config since changed
     path.write_text(json.dumps(table))
@@ -200,7 +200,7 @@ def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path
     published = json.loads(PUBLISHED.read_text())
     # Refused if the protocol or a method's config has changed since its runs were trained.
     merged = results.merged_runs([PUBLISHED], list(published["methods"]),
-                                   jobs.Settings(tmp_path))  # fmt: skip
+                                   jobs.JobSettings(tmp_path))  # fmt: skip
     assert merged.keys() == published["methods"].keys()
     for name, result in published["methods"].items():
         runs = result["runs"]
@@ -228,7 +228,7 @@ def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, m
     # (both runs evaluated on the same games, whichever tests ran before)
     cli.main(["--tiny", "--out", str(out), "--methods", "ppo-v0", "--seeds", "0", "1",
                     "--episodes", "2"])  # fmt: skip
-    settings = jobs.Settings(out, episodes=2, tiny=True)
+    settings = jobs.JobSettings(out, episodes=2, tiny=True)
     monkeypatch.setattr(protocol, "TRAINING_SEEDS", (0, 1))  # (two tiny runs stand for five)
     for seed, validated in ((0, 900.0), (1, 400.0)):  # seed 0 validated better
         run = jobs.job_run("ppo-v0", seed, settings)
@@ -248,7 +248,7 @@ def test_the_run_best_in_validation_ships_under_the_name_given(tiny, tmp_path, m
     assert load_policy(str(model)).env_id == "Pinball-v0"  # the zip carries its config
     # Runs published elsewhere count in the choice; the chosen one ships from a run here.
     results.aggregate_table(["ppo-v0"], [0, 1], settings)
-    here = jobs.Settings(tmp_path / "here", episodes=2, tiny=True)
+    here = jobs.JobSettings(tmp_path / "here", episodes=2, tiny=True)
     shutil.copytree(out / "ppo-v0" / "seed1", here.out / "ppo-v0" / "seed1")
     merged = results.merged_runs([out / "benchmark.json"], ["ppo-v0"], here)
     with pytest.raises(ConfigError, match=r"best run, seed 0 .*\(900\).*\(--seeds 0\)"):
@@ -285,12 +285,12 @@ def test_a_bad_ship_is_refused_with_what_is_wrong(text, error):
 
 def test_a_run_trained_with_another_config_is_refused(tiny, tmp_path):
     out, _ = tiny
-    run = jobs.job_run("ppo-v0", 0, jobs.Settings(out, tiny=True))
+    run = jobs.job_run("ppo-v0", 0, jobs.JobSettings(out, tiny=True))
     copy = tmp_path / "ppo-v0" / "seed0" / run.name
     copy.mkdir(parents=True)
     text = (run / "config.yaml").read_text().replace("total_frames: 3000", "total_frames: 4000")
     (copy / "config.yaml").write_text(text)
-    settings = jobs.Settings(tmp_path, tiny=True)
+    settings = jobs.JobSettings(tmp_path, tiny=True)
     with pytest.raises(ConfigError, match=r"than ppo-v0 seed 0 .*total_frames: 4000"):
         jobs.job_run("ppo-v0", 0, settings)
     # Its notes reworded since: the same training.

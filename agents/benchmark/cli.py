@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 import agents.benchmark
-from agents.benchmark.jobs import Settings, job_done, run_job, run_local, run_on_cluster
+from agents.benchmark.jobs import JobSettings, job_done, run_job, run_local, run_on_cluster
 from agents.benchmark.methods import METHODS, TINY_EPISODES
 from agents.benchmark.results import aggregate_table, merged_run, merged_runs
 from agents.benchmark.shipping import parse_ship, ship
@@ -45,7 +45,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any] | None:
         parser.error("seeds must be >= 0")
     if args.ship and args.tiny:
         parser.error("--ship ships agents trained under the protocol, not --tiny ones")
-    settings = Settings(args.out.resolve(), args.episodes, args.tiny)
+    settings = JobSettings(args.out.resolve(), args.episodes, args.tiny)
     try:
         ships = [parse_ship(text) for text in args.ship]
         if args.job is not None:

@@ -28,7 +28,7 @@ SUMMARY = "summary.json"
 
 
 @dataclasses.dataclass(frozen=True)
-class Settings:
+class JobSettings:
     """What every job of one benchmark shares."""
 
     out: Path
@@ -40,12 +40,12 @@ class Settings:
         return TINY_FRAMES if self.tiny else METHODS[name].frames
 
 
-def job_folder(settings: Settings, name: str, seed: int) -> Path:
+def job_folder(settings: JobSettings, name: str, seed: int) -> Path:
     """Where a job's results go: ``OUT/METHOD/seedS`` (a baseline: ``OUT/METHOD``)."""
     return settings.out / name / f"seed{seed}" if METHODS[name].trained else settings.out / name
 
 
-def job_config(name: str, seed: int, settings: Settings) -> TrainConfig:
+def job_config(name: str, seed: int, settings: JobSettings) -> TrainConfig:
     """The training config of a job: the method's config, seed ``seed``, the method's budget in
     frames and no time limit (and ``--tiny``'s settings). On a budget above the protocol's
     first, the config's ``SCALED_BY_BUDGET`` keys are scaled by the budget's ratio to it."""
@@ -61,7 +61,7 @@ def job_config(name: str, seed: int, settings: Settings) -> TrainConfig:
 
 
 def job_run(
-    name: str, seed: int, settings: Settings, config: TrainConfig | None = None
+    name: str, seed: int, settings: JobSettings, config: TrainConfig | None = None
 ) -> Path | None:
     """The run folder of a job (None before it starts); ConfigError if it holds another config
     than the job's (``config``, by default :func:`job_config`'s) or several runs."""
@@ -83,7 +83,9 @@ def job_run(
     return runs[0]
 
 
-def job_done(name: str, seed: int, settings: Settings, config: TrainConfig | None = None) -> bool:
+def job_done(
+    name: str, seed: int, settings: JobSettings, config: TrainConfig | None = None
+) -> bool:
     """The job's evaluation of this benchmark's games is written (so its training finished)."""
     if METHODS[name].trained:
         run = job_run(name, seed, settings, config)
@@ -98,7 +100,7 @@ def job_done(name: str, seed: int, settings: Settings, config: TrainConfig | Non
     return json.loads(summary.read_text())["seeds"] == [first, first + settings.episodes - 1]
 
 
-def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None = None) -> Path:
+def run_job(name: str, seed: int, settings: JobSettings, config: TrainConfig | None = None) -> Path:
     """Train (or go on training) and evaluate one method x seed; returns its results folder.
     A finished job is left as it is. ``config``: the job's training config (by default
     :func:`job_config`'s; a cluster node gets it from the driver, it has no configs/)."""
@@ -132,7 +134,7 @@ def run_job(name: str, seed: int, settings: Settings, config: TrainConfig | None
     return folder
 
 
-def _evaluate_job(folder: Path, settings: Settings, out: Path, **agent: Any) -> None:
+def _evaluate_job(folder: Path, settings: JobSettings, out: Path, **agent: Any) -> None:
     """Play the protocol's games with ``agent`` (evaluate's policy/env or model_path) into
     ``out``, timed in the job's record."""
     started = time.monotonic()
@@ -157,7 +159,7 @@ def _log_job(folder: Path, node: str | None = None, **seconds: float) -> None:
 # --- running the jobs ---------------------------------------------------------------------------
 
 
-def run_local(jobs: list[tuple[str, int]], settings: Settings, parallel: int) -> None:
+def run_local(jobs: list[tuple[str, int]], settings: JobSettings, parallel: int) -> None:
     """Each job in its own process (``python -m agents.benchmark --job``), ``parallel`` at once."""
 
     def one(job: tuple[str, int]) -> None:
@@ -175,7 +177,7 @@ def run_local(jobs: list[tuple[str, int]], settings: Settings, parallel: int) ->
             future.result()
 
 
-def _settings_args(settings: Settings) -> list[str]:
+def _settings_args(settings: JobSettings) -> list[str]:
     return ["--out", str(settings.out), "--episodes", str(settings.episodes),
             *(["--tiny"] if settings.tiny else [])]  # fmt: skip
 
@@ -206,7 +208,7 @@ def unpack(data: bytes, folder: Path) -> None:
 
 
 def remote_job(
-    name: str, seed: int, settings: Settings, config: dict[str, Any] | None, partial: bytes,
+    name: str, seed: int, settings: JobSettings, config: dict[str, Any] | None, partial: bytes,
     commit: str | None,
 ) -> tuple[bytes, str, str | None]:  # fmt: skip
     """A job on a cluster node: in a scratch folder, from ``partial`` (the folder as the driver
@@ -230,7 +232,7 @@ def remote_job(
         return pack(folder), node, None
 
 
-def run_on_cluster(jobs: list[tuple[str, int]], settings: Settings, address: str) -> None:
+def run_on_cluster(jobs: list[tuple[str, int]], settings: JobSettings, address: str) -> None:
     """Each job as a Ray task on the cluster at ``address``, its folder gathered into OUT; a
     job that fails is reported (its folder kept, to go on from) after the others are in."""
     import ray

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.benchmark.jobs import JOB_FILE, Settings, job_config, job_done, job_folder, job_run
+from agents.benchmark.jobs import JOB_FILE, JobSettings, job_config, job_done, job_folder, job_run
 from agents.benchmark.methods import METHODS, TINY_FRAMES, config_digest
 from agents.benchmark.plots import plot_benchmark
 from agents.benchmark.tables import markdown_table
@@ -31,7 +31,7 @@ Merged = dict[str, list[dict[str, Any]]]
 
 
 def method_results(
-    name: str, seeds: list[int], settings: Settings, merged: Merged | None = None
+    name: str, seeds: list[int], settings: JobSettings, merged: Merged | None = None
 ) -> dict[str, Any] | None:
     """The runs of a method that are done (in OUT, else in ``merged``: :func:`merged_runs`) and
     the protocol's metrics over them (None: none)."""
@@ -68,7 +68,7 @@ def method_results(
 SCORED_UNDER = ("repeat_action_probability", "game", "training_frames", "eval_seeds", "tiny")
 
 
-def merged_runs(paths: list[Path], names: list[str], settings: Settings) -> Merged:
+def merged_runs(paths: list[Path], names: list[str], settings: JobSettings) -> Merged:
     """The runs of earlier ``benchmark.json`` files (another machine's, or the one published in
     ``docs/``) for methods ``names``, the first file's run of a seed before a later one's;
     ConfigError where one was measured under another protocol than this benchmark's or trained
@@ -134,7 +134,7 @@ def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
             "config_digest": digest}  # fmt: skip
 
 
-def protocol_record(settings: Settings) -> dict[str, Any]:
+def protocol_record(settings: JobSettings) -> dict[str, Any]:
     """The protocol as this benchmark applies it (``benchmark.json``'s ``protocol``)."""
     first = protocol.EVAL_SEEDS.start
     return {
@@ -151,7 +151,7 @@ def protocol_record(settings: Settings) -> dict[str, Any]:
 
 
 def aggregate_table(
-    names: list[str], seeds: list[int], settings: Settings, merged: Merged | None = None
+    names: list[str], seeds: list[int], settings: JobSettings, merged: Merged | None = None
 ) -> dict[str, Any]:
     """Write benchmark.json, benchmark.csv, runs.csv and the plots; returns the table."""
     results = {name: method_results(name, seeds, settings, merged) for name in names}

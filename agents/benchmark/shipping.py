@@ -6,7 +6,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from agents.benchmark.jobs import Settings
+from agents.benchmark.jobs import JobSettings
 from agents.benchmark.methods import METHODS
 from agents.benchmark.results import Merged, method_results
 from agents.config import ConfigError
@@ -32,7 +32,7 @@ def parse_ship(text: str) -> tuple[str, str]:
 def ship(
     name: str,
     seeds: list[int],
-    settings: Settings,
+    settings: JobSettings,
     ship_as: str | None = None,
     into: Path | None = None,
     merged: Merged | None = None,
@@ -60,7 +60,7 @@ def ship(
     return into / f"{ship_as}.zip"
 
 
-def check_shippable(name: str, runs: list[dict[str, Any]], settings: Settings) -> None:
+def check_shippable(name: str, runs: list[dict[str, Any]], settings: JobSettings) -> None:
     """ConfigError unless method ``name`` has a validated run of the protocol's frames for
     every training seed of the protocol."""
     short = [run["seed"] for run in runs if run["frames"] < 0.99 * settings.frames(name)]
@@ -76,7 +76,7 @@ def check_shippable(name: str, runs: list[dict[str, Any]], settings: Settings) -
 
 
 def choose_run(
-    name: str, runs: list[dict[str, Any]], settings: Settings, from_out: bool
+    name: str, runs: list[dict[str, Any]], settings: JobSettings, from_out: bool
 ) -> tuple[dict[str, Any], str]:
     """The run of ``runs`` to ship and how it was chosen: the best in validation, which must be
     in OUT (with ``from_out``: the best of those in OUT, saying what was better)."""

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from pinball_env import checks
-from pinball_env.procgen import DIFFICULTIES, MAX_SEED, RANGES, UNLIMITED_LAYOUTS, generate_table
+from pinball_env.procgen import RANGES, UNLIMITED_LAYOUTS, generate_table, layout_seeds
 from pinball_env.render import PIXELS_PER_METRE
 from pinball_env.table import Table
 
@@ -64,29 +64,30 @@ class Layouts:
     drawn does not depend on any of this."""
 
     def __init__(self, count: int, start: int, difficulty: str, targets: bool = False) -> None:
-        self.count = checks.integer("num_layouts", count, 0)
-        self.start = checks.integer("start_layout", start, 0)
-        checks.choice("difficulty", difficulty, DIFFICULTIES)
+        # The options are checked where they are declared (PinballOptions); the seeds are
+        # procgen's to check.
+        self.seeds = layout_seeds(count, start)
+        self.start = start
         self.difficulty = difficulty
-        self.targets = checks.flag("targets", targets)
+        self.targets = targets
         self._upcoming: dict[int, int] = {}  # env -> the layout of its next game
         self._to_prefetch: list[int] = []  # upcoming layouts not yet sent to the prefetcher
         self._pending: dict[int, Future[Table]] = {}  # layout -> its table, being generated
         self._prefetcher: ThreadPoolExecutor | None = None  # one thread, beside the training
         self._generators: ThreadPoolExecutor | None = None  # for the tables needed now
         self._pid = os.getpid()  # the process whose threads the executors have
-        if self.start + (self.count or UNLIMITED_LAYOUTS) - 1 > MAX_SEED:
-            raise ValueError(f"layouts beyond seed {MAX_SEED}: lower start_layout")
 
     def draw(self, rng: np.random.Generator) -> int:
         """A layout drawn uniformly from the env's."""
-        return self.start + int(rng.integers(self.count or UNLIMITED_LAYOUTS))
+        return self.seeds[int(rng.integers(len(self.seeds)))]
 
     def check(self, layout: object) -> int:
         """``layout`` (a reset option) if it is one of the env's; a ValueError if not."""
-        end = self.start + (self.count or UNLIMITED_LAYOUTS)
-        if not checks.is_int(layout) or not self.start <= layout < end:
-            raise ValueError(f"layout must be an integer in [{self.start}, {end}), got {layout!r}")
+        if not checks.is_int(layout) or layout not in self.seeds:
+            seeds = self.seeds
+            raise ValueError(
+                f"layout must be an integer in [{seeds.start}, {seeds.stop}), got {layout!r}"
+            )
         return int(layout)
 
     def pick(self, env: int, rng: np.random.Generator, chosen: object = None) -> int:

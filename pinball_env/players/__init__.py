@@ -4,8 +4,10 @@ agents (the ``heuristic`` baseline, the warm start's teacher).
 
 - :class:`HeuristicPolicy`: flips timed from the ball's predicted touch, catch and aim; on a
   table with the cabinet, the skill shot and nudges for outlane balls.
+- :class:`RandomPolicy`: uniformly random actions (the protocol's lower reference).
 """
 
 from pinball_env.players.heuristic import HeuristicPolicy, plunger_pulls, skill_shot_frames
+from pinball_env.players.random import RandomPolicy
 
-__all__ = ["HeuristicPolicy", "plunger_pulls", "skill_shot_frames"]
+__all__ = ["HeuristicPolicy", "RandomPolicy", "plunger_pulls", "skill_shot_frames"]
