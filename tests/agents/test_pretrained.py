@@ -53,7 +53,7 @@ def test_a_pretrained_agent_scores_as_its_card_says(name, tmp_path):
 def test_a_pretrained_agent_is_a_published_run(name):
     # Its card's figures are those of its run in the published table (docs/benchmark.json).
     card = pretrained_card(name)
-    published = Path(__file__).resolve().parent.parent / "docs" / "benchmark.json"
+    published = Path(__file__).resolve().parents[2] / "docs" / "benchmark.json"
     runs = json.loads(published.read_text())["methods"][card.get("method", name)]["runs"]
     (run,) = [run for run in runs if run["seed"] == card["seed"]]
     assert (run["commit"], run["frames"], run["steps"]) == (

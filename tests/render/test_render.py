@@ -203,13 +203,20 @@ def test_renderer_does_not_import_pygame() -> None:
 
 
 def test_window_shows_frames_headless(monkeypatch: pytest.MonkeyPatch) -> None:
-    pytest.importorskip("pygame")
+    pygame = pytest.importorskip("pygame")
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
-    renderer = Renderer(TABLE, *SMALL)
+    frame = Renderer(TABLE, *SMALL).frame(OPEN_SPOT, REST)
     window = Window((168, 168), fps=1000.0, title="test")
+
+    def shown() -> np.ndarray:  # the window's pixels, (H, W, 3) as the frames
+        return pygame.surfarray.array3d(pygame.display.get_surface()).swapaxes(0, 1)
+
     try:
-        window.show(renderer.frame(OPEN_SPOT, REST))  # scaled up to the window
-        window.show(np.zeros((168, 168, 3), dtype=np.uint8))
+        window.show(frame)  # scaled up twice to the window: each pixel a 2x2 block
+        assert np.array_equal(shown(), frame.repeat(2, axis=0).repeat(2, axis=1))
+        window.show(np.zeros((168, 168, 3), dtype=np.uint8))  # the window's size: as it is
+        assert not shown().any()
+        assert not window.quit_requested()
     finally:
         window.close()
     window.close()  # a second close is harmless

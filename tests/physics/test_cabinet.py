@@ -49,7 +49,7 @@ from pinball_env.table import (
     load_table,
     table_from_dict,
 )
-from tests.test_reliability import assert_sound
+from tests.sim.soundness import assert_sound
 
 NOOP, PLUNGER = 0, 4
 NUDGE_LEFT, NUDGE_RIGHT, NUDGE_UP = 8, 16, 24
@@ -726,7 +726,7 @@ def test_pinball_v1_games_are_bitwise_identical_across_processes():
     def run() -> str:
         result = subprocess.run(
             [sys.executable, "-c", V1_ROLLOUT], capture_output=True, text=True, check=True,
-            timeout=300, cwd=Path(__file__).resolve().parent.parent,
+            timeout=300, cwd=Path(__file__).resolve().parents[2],
         )  # fmt: skip
         return result.stdout.strip()
 

@@ -14,20 +14,9 @@ from agents import evaluate
 from agents.config import ConfigError
 from agents.policy import load_policy
 from agents.runs import AGENT_ENTRY
-from tests.test_agents import ROOT, strip_agent_entry, tiny_run
+from tests.agents.tiny_runs import ROOT, readme_example, strip_agent_entry, tiny_run
 
 EPISODES = 3
-
-
-def readme_example(path: Path, seed: int) -> int:
-    """The README's "Use a trained agent" example, as a user would write it."""
-    policy = load_policy(path)
-    env = policy.make_env()
-    obs, info = env.reset(seed=seed)
-    terminated = truncated = False
-    while not (terminated or truncated):
-        obs, _, terminated, truncated, info = env.step(policy.act(obs))
-    return info["score"]
 
 
 def evaluated_scores(path: Path, out: Path) -> list[int]:

@@ -10,7 +10,7 @@ import numpy as np
 from pinball_env.sim.world import World
 from pinball_env.table import load_table
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 TRACE_SCRIPT = """
 import sys
@@ -30,8 +30,8 @@ def test_kernel_tests_pass_without_jit():
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
     result = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not slow",
-         "tests/test_sweep.py", "tests/test_world.py", "tests/test_flipper.py",
-         "tests/test_classic.py"],
+         "tests/physics/test_sweep.py", "tests/sim/test_world.py",
+         "tests/physics/test_flipper.py", "tests/sim/test_classic.py"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=600,
     )  # fmt: skip
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]

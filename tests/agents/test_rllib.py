@@ -16,10 +16,9 @@ import ray
 from agents import evaluate, rllib
 from agents.config import ConfigError, RllibConfig, load_config
 from agents.policy import load_policy
-from tests.test_agents import start_training, wait_for
-from tests.test_policy import readme_example
+from tests.agents.tiny_runs import readme_example, start_training, wait_for
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "configs" / "agents" / "rllib_ppo.yaml"
 # One iteration is a few hundred env steps from a few games.
 TINY = [

@@ -19,7 +19,7 @@ from pinball_env.players import HeuristicPolicy
 from pinball_env.table import TableError, builtin_tables_dir, load_table
 from pinball_env.tools.demo import main as demo_main
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OBS_TYPES = ["state", "rgb", "grayscale"]
 V0_NOTICE = ".*Pinball-v0 is out of date"
 

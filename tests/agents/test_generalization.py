@@ -10,7 +10,7 @@ import pytest
 from agents import generalization
 from agents.generalization import TEST_START, normalised
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "configs" / "agents" / "procgen_ppo.yaml"
 TINY = ["hyperparams.n_steps=16", "hyperparams.batch_size=32", "env.num_envs=2",
         "total_timesteps=96"]  # fmt: skip

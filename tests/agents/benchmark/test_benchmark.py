@@ -28,7 +28,7 @@ from pinball_env.recording import (
     write_recording,
 )
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -193,7 +193,7 @@ def test_an_earlier_benchmark_of_another_protocol_or_config_is_refused(tiny, tmp
         results.merged_runs([path], ["ppo-v0"], settings)
 
 
-PUBLISHED = Path(__file__).resolve().parent.parent / "docs" / "benchmark.json"
+PUBLISHED = Path(__file__).resolve().parents[3] / "docs" / "benchmark.json"
 
 
 def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path):

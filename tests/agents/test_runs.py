@@ -1,0 +1,62 @@
+"""Run folders (agents.runs): atomic checkpoints, the statistics saved first, the progress bar."""
+
+import pytest
+
+from agents.config import load_config
+from agents.runs import atomic_write, save_model
+from tests.agents.tiny_runs import ROOT
+
+
+def test_a_checkpoint_write_killed_midway_leaves_the_last_one_whole(tmp_path):
+    folder = tmp_path / "checkpoints"
+    atomic_write(folder / "step_100.zip", lambda file: file.write(b"complete"))
+
+    def killed(file):
+        file.write(b"half a checkp")
+        raise KeyboardInterrupt  # the run dies in the middle of the write
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(folder / "step_200.zip", killed)
+    assert [path.name for path in folder.iterdir()] == ["step_100.zip"]
+    assert (folder / "step_100.zip").read_bytes() == b"complete"
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(folder / "step_100.zip", killed)  # nor is an old one overwritten by half
+    assert (folder / "step_100.zip").read_bytes() == b"complete"
+
+
+def test_save_model_writes_the_normalisation_statistics_first(tmp_path, monkeypatch):
+    order = []
+    monkeypatch.setattr("agents.runs.atomic_write", lambda path, write: order.append(path.name))
+
+    class Model:
+        def get_env(self):
+            return type("VecNormalize", (), {"obs_rms": None, "norm_obs": False})()
+
+        def save(self, file):
+            pass
+
+    save_model(Model(), tmp_path, "step_5", load_config(ROOT / "configs/agents/ppo.yaml"))
+    assert order == ["step_5_vecnormalize.pkl", "step_5.zip"]
+
+
+def test_the_progress_bar_counts_down_to_max_minutes(monkeypatch):
+    from agents.runs import ProgressBar
+
+    clock = [1000.0]
+    monkeypatch.setattr("agents.runs.time.monotonic", lambda: clock[0])
+    config = load_config(ROOT / "configs/agents/ppo.yaml", ["max_minutes=1"])
+    bar = ProgressBar(config, 0, deadline=1060.0, show=True)
+    clock[0] = 1010.0
+    bar.update(1000)  # 100 steps/s with 50 s left: the run will end at 6000 steps
+    assert bar.bar.total == 6000 and bar.bar.desc.startswith("stops at max_minutes")
+    clock[0] = 1020.0
+    bar.update(2000)
+    assert bar.bar.total == 6000
+    unlimited = ProgressBar(
+        load_config(ROOT / "configs/agents/ppo.yaml", ["max_minutes=0"]), 0, 0.0, True
+    )
+    clock[0] = 1030.0
+    unlimited.update(1000)
+    assert unlimited.bar.total == config.total_timesteps
+    bar.close()
+    unlimited.close()
