@@ -46,8 +46,8 @@ class PinballCore:
             self.layouts = Layouts(
                 options.num_layouts, options.start_layout, options.difficulty, options.targets
             )
-            table = self.layouts.table(self.layouts.start)
-            self.layout = np.full(n_envs, self.layouts.start, dtype=np.int64)
+            table = self.layouts.table(self.layouts.seeds.start)
+            self.layout = np.full(n_envs, self.layouts.seeds.start, dtype=np.int64)
         elif isinstance(options.table, Table):
             table = options.table
         else:

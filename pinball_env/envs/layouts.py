@@ -67,7 +67,6 @@ class Layouts:
         # The options are checked where they are declared (PinballOptions); the seeds are
         # procgen's to check.
         self.seeds = layout_seeds(count, start)
-        self.start = start
         self.difficulty = difficulty
         self.targets = targets
         self._upcoming: dict[int, int] = {}  # env -> the layout of its next game
