@@ -23,39 +23,24 @@ from pinball_env.options import GENERATED, MAX_EPISODE_STEPS
 
 __version__ = "0.1.0"
 
-# The entry points: the classes' one home, pinball_env.envs.
-register(
-    id="Pinball-v0",
-    entry_point="pinball_env.envs:PinballEnv",
-    vector_entry_point="pinball_env.envs:PinballVectorEnv",
-    max_episode_steps=MAX_EPISODE_STEPS,
-)
+# The envs, each on its table, with what it is. Every one has the same entry points (the classes'
+# one home, pinball_env.envs) and the game's two minutes as its time limit.
+ENVS = {
+    "Pinball-v0": "the two-button table: the flippers, a launch from the machine's plunger",
+    "Pinball-v1": "the whole cabinet (the player's plunger, the nudge and the tilt), rules and "
+    "targets",
+    "Pinball-v2": "v1's game with a tilt that any sustained nudging trips: the benchmark's env",
+    "PinballProcgen-v0": "a generated table every game (``num_layouts``, ``difficulty``, ...)",
+}
+TABLES = {"Pinball-v0": None, "Pinball-v1": "classic_v1", "Pinball-v2": "classic_v2",
+          "PinballProcgen-v0": GENERATED}  # fmt: skip
 
-# The whole cabinet: the classic layout with the player's plunger, the nudge and the tilt, and
-# the full action set (32 discrete actions).
-register(
-    id="Pinball-v1",
-    entry_point="pinball_env.envs:PinballEnv",
-    vector_entry_point="pinball_env.envs:PinballVectorEnv",
-    max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"table": "classic_v1"},
-)
-
-# Pinball-v1's game with a tilt that any sustained nudging trips (v1's ignores one-way nudging):
-# the protocol's env.
-register(
-    id="Pinball-v2",
-    entry_point="pinball_env.envs:PinballEnv",
-    vector_entry_point="pinball_env.envs:PinballVectorEnv",
-    max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"table": "classic_v2"},
-)
-
-# The same envs on a generated table each game (the table source "generated").
-register(
-    id="PinballProcgen-v0",
-    entry_point="pinball_env.envs:PinballEnv",
-    vector_entry_point="pinball_env.envs:PinballVectorEnv",
-    max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"table": GENERATED},
-)
+for _id, _table in TABLES.items():
+    register(
+        id=_id,
+        entry_point="pinball_env.envs:PinballEnv",
+        vector_entry_point="pinball_env.envs:PinballVectorEnv",
+        max_episode_steps=MAX_EPISODE_STEPS,
+        kwargs={} if _table is None else {"table": _table},
+    )
+del _id, _table

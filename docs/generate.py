@@ -1,0 +1,254 @@
+"""The documentation's generated parts, written from the code's own declarations and the published
+results so that they cannot drift: ``python docs/generate.py`` rewrites them, ``--check`` only
+says which are stale (``tests/test_docs.py`` runs it).
+
+A generated part sits in a page of ``docs/`` (or the README) between two markers::
+
+    <!-- generated: NAME -->
+    ...
+    <!-- end generated: NAME -->
+
+and ``NAME`` is one of :data:`GENERATORS` (``observation:Pinball-v1`` passes its argument on).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import dataclasses
+import inspect
+import json
+import re
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import gymnasium as gym
+import yaml
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # the agents package, run from the checkout
+
+import pinball_env  # noqa: E402  (registers the envs)
+from pinball_env.options import PinballOptions, VectorOptions  # noqa: E402
+
+PAGES = (ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")))
+MARKER = re.compile(
+    r"(<!-- generated: (?P<name>[\w:.-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)",
+    re.S,
+)
+BENCHMARK = ROOT / "docs" / "benchmark.json"
+CONFIGS = ROOT / "configs" / "agents"
+PRETRAINED = ROOT / "agents" / "pretrained"
+
+
+def _row(*cells: object) -> str:
+    return "| " + " | ".join(str(cell).replace("|", "\\|").replace("\n", " ") for cell in cells) + " |"
+
+
+def _table(header: tuple[str, ...], rows: list[tuple[object, ...]]) -> str:
+    lines = [_row(*header), "|" + "---|" * len(header)]
+    return "\n".join(lines + [_row(*row) for row in rows]) + "\n"
+
+
+# --- the envs ------------------------------------------------------------------------------------
+
+
+def envs(_: str = "") -> str:
+    """The registered envs: id, table, spaces and what each is."""
+    rows = []
+    for env_id, summary in pinball_env.ENVS.items():
+        env = gym.make(env_id)
+        spec = env.spec
+        table = spec.kwargs.get("table", PinballOptions.table)
+        rows.append((f"`{env_id}`", f"`{table}`", f"`{env.action_space}`",
+                     f"`{env.observation_space.shape}`", summary))  # fmt: skip
+        env.close()
+    return _table(("id", "table", "actions", "state observation", "what it is"), rows)
+
+
+def actions(env_id: str) -> str:
+    """An env's discrete actions, by number, and its buttons (``action_type="multibinary"``)."""
+    env = gym.make(env_id)
+    meanings = env.unwrapped.get_action_meanings()
+    buttons = gym.make(env_id, action_type="multibinary").unwrapped.button_names
+    env.close()
+    rows = [(number, f"`{name}`") for number, name in enumerate(meanings)]
+    text = _table(("action", "name"), rows)
+    return text + f"\n`action_type=\"multibinary\"`: `MultiBinary({len(buttons)})`, the buttons " + (
+        ", ".join(f"`{name}`" for name in buttons) + " in that order.\n"
+    )
+
+
+def observation(env_id: str) -> str:
+    """An env's state observation, row by row, with its bounds."""
+    env = gym.make(env_id)
+    rows = env.unwrapped.observation_rows
+    env.close()
+    return _table(
+        ("index", "observation", "min", "max", "unit"),
+        [(i, row.meaning, f"{row.low:.4g}", f"{row.high:.4g}", row.unit or "-")
+         for i, row in enumerate(rows)],
+    )  # fmt: skip
+
+
+def _field_docs(cls: type) -> dict[str, str]:
+    """The docstring under each field of dataclass ``cls`` (its source's string after it)."""
+    body = ast.parse(inspect.getsource(cls)).body[0].body  # type: ignore[attr-defined]
+    docs = {}
+    for node, after in zip(body, body[1:], strict=False):
+        if isinstance(node, ast.AnnAssign) and isinstance(after, ast.Expr):
+            if isinstance(after.value, ast.Constant) and isinstance(after.value.value, str):
+                docs[node.target.id] = " ".join(after.value.value.split())  # type: ignore[union-attr]
+    return docs
+
+
+def _options_table(cls: type) -> str:
+    docs = _field_docs(cls)
+    rows = []
+    for spec in dataclasses.fields(cls):
+        default = getattr(spec.default, "value", spec.default)  # (an enum's value)
+        rows.append((f"`{spec.name}`", f"`{default!r}`", docs[spec.name]))
+    return _table(("option", "default", "meaning"), rows)
+
+
+def options(_: str = "") -> str:
+    """Every option of a game (``PinballOptions``), with its default and meaning."""
+    return _options_table(PinballOptions)
+
+
+def vector_options(_: str = "") -> str:
+    """The options a vector env adds (``VectorOptions``)."""
+    return _options_table(VectorOptions)
+
+
+# --- tables --------------------------------------------------------------------------------------
+
+
+def table_schema(_: str = "") -> str:
+    """Every field of a table file, with its kind and range (the schema's declarations)."""
+    from pinball_env.table.reference import schema_fields
+
+    return _table(
+        ("field", "value", "default"),
+        [(f"`{f.path}`", f.kind, f"`{f.default}`" if f.default is not None else "required")
+         for f in schema_fields()],
+    )  # fmt: skip
+
+
+def rules_schema(_: str = "") -> str:
+    """The rules' triggers and effects (the rules' declarations)."""
+    from pinball_env.table.reference import rule_keys
+
+    return _table(("kind", "key", "what it does"), [(k.kind, f"`{k.key}`", k.meaning)
+                                                    for k in rule_keys()])  # fmt: skip
+
+
+# --- agents and results --------------------------------------------------------------------------
+
+
+def _first_sentence(text: str) -> str:
+    text = " ".join(str(text).split())
+    end = text.find(". ")
+    return text if end < 0 else text[: end + 1]
+
+
+def configs(_: str = "") -> str:
+    """Every training config in ``configs/agents/``: algorithm, env, budget and what it is."""
+    from agents.config import load_config
+
+    rows = []
+    for path in sorted(CONFIGS.glob("*.yaml")):
+        raw = yaml.safe_load(path.read_text())
+        if "algo" not in raw and "base" not in raw:
+            continue
+        config = load_config(path)
+        budget = getattr(config, "total_frames", None) or config.total_timesteps
+        unit = "frames" if getattr(config, "total_frames", None) else "steps"
+        rows.append((f"`{path.name}`", getattr(config, "algo", "ppo").upper(),
+                     f"`{config.env.id}`", f"{budget / 1e6:g}M {unit}",
+                     _first_sentence(raw.get("notes", ""))))  # fmt: skip
+    return _table(("config", "algorithm", "env", "budget", "what"), rows)
+
+
+def pretrained(_: str = "") -> str:
+    """The agents that ship (``pretrained:NAME``), from their cards."""
+    rows = []
+    for path in sorted(PRETRAINED.glob("*.json")):
+        card = json.loads(path.read_text())
+        result = card["protocol"]
+        low, high = result["score_iqm_ci95"]
+        rows.append((f"`pretrained:{card['name']}`", f"`{card['env_id']}`",
+                     f"`{card['config']}`", f"{card['trained']['frames'] / 1e6:.0f}M",
+                     f"{result['score_iqm']:.0f} [{low:.0f}, {high:.0f}]",
+                     card["chosen_by"]))  # fmt: skip
+    return _table(("name", "env", "config", "frames", "IQM score [95% CI]", "chosen by"), rows)
+
+
+def results(env_id: str = "") -> str:
+    """The benchmark's table (``docs/benchmark.json``), for one env or all."""
+    from agents.benchmark.tables import markdown_table
+
+    published = json.loads(BENCHMARK.read_text())
+    methods = {name: result for name, result in published["methods"].items()
+               if not env_id or result["env_id"] == env_id}  # fmt: skip
+    return markdown_table(methods)
+
+
+def references(_: str = "") -> str:
+    """The protocol's reference scores (random and heuristic) per env."""
+    published = json.loads(BENCHMARK.read_text())
+    scores = published["protocol"]["reference_scores"]
+    return _table(("env", "random", "heuristic"), [(f"`{env}`", f"{s['random']:.1f}",
+                                                   f"{s['heuristic']:.1f}")
+                                                  for env, s in scores.items()])  # fmt: skip
+
+
+GENERATORS: dict[str, Callable[[str], str]] = {
+    "envs": envs,
+    "actions": actions,
+    "observation": observation,
+    "options": options,
+    "vector-options": vector_options,
+    "table-schema": table_schema,
+    "rules-schema": rules_schema,
+    "configs": configs,
+    "pretrained": pretrained,
+    "results": results,
+    "references": references,
+}
+
+
+def generated(name: str) -> str:
+    """The text of the generated part ``NAME`` (or ``NAME:ARGUMENT``)."""
+    key, _, argument = name.partition(":")
+    if key not in GENERATORS:
+        raise SystemExit(f"unknown generated part {name!r} (known: {', '.join(GENERATORS)})")
+    return GENERATORS[key](argument)
+
+
+def regenerate(text: str) -> str:
+    """``text`` with every generated part written anew."""
+    return MARKER.sub(lambda m: m[1] + generated(m["name"]) + m[4], text)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true", help="only list the stale pages")
+    args = parser.parse_args(argv)
+    stale = []
+    for page in PAGES:
+        text = page.read_text()
+        new = regenerate(text)
+        if new != text:
+            stale.append(page.relative_to(ROOT))
+            if not args.check:
+                page.write_text(new)
+    verb = "stale (run python docs/generate.py)" if args.check else "rewritten"
+    for page in stale:
+        print(f"{page}: {verb}")
+    return 1 if args.check and stale else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
