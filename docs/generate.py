@@ -17,9 +17,11 @@ import argparse
 import ast
 import dataclasses
 import inspect
+import itertools
 import json
 import re
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -32,6 +34,9 @@ sys.path.insert(0, str(ROOT))  # the agents package, run from the checkout
 import pinball_env  # noqa: E402  (registers the envs)
 from pinball_env.options import PinballOptions, VectorOptions  # noqa: E402
 
+# The pages describe Pinball-v0 and -v1 too, which Gymnasium calls out of date beside -v2.
+warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
+
 PAGES = (ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")))
 MARKER = re.compile(
     r"(<!-- generated: (?P<name>[\w:.-]+) -->\n)(?P<body>.*?)(<!-- end generated: (?P=name) -->)",
@@ -43,7 +48,8 @@ PRETRAINED = ROOT / "agents" / "pretrained"
 
 
 def _row(*cells: object) -> str:
-    return "| " + " | ".join(str(cell).replace("|", "\\|").replace("\n", " ") for cell in cells) + " |"
+    cells = tuple(str(cell).replace("|", "\\|").replace("\n", " ") for cell in cells)
+    return "| " + " | ".join(cells) + " |"
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[object, ...]]) -> str:
@@ -75,9 +81,9 @@ def actions(env_id: str) -> str:
     env.close()
     rows = [(number, f"`{name}`") for number, name in enumerate(meanings)]
     text = _table(("action", "name"), rows)
-    return text + f"\n`action_type=\"multibinary\"`: `MultiBinary({len(buttons)})`, the buttons " + (
-        ", ".join(f"`{name}`" for name in buttons) + " in that order.\n"
-    )
+    listed = ", ".join(f"`{name}`" for name in buttons)
+    kind = f'`action_type="multibinary"`: `MultiBinary({len(buttons)})`'
+    return text + f"\n{kind}, the buttons {listed} in that order.\n"
 
 
 def observation(env_id: str) -> str:
@@ -96,10 +102,10 @@ def _field_docs(cls: type) -> dict[str, str]:
     """The docstring under each field of dataclass ``cls`` (its source's string after it)."""
     body = ast.parse(inspect.getsource(cls)).body[0].body  # type: ignore[attr-defined]
     docs = {}
-    for node, after in zip(body, body[1:], strict=False):
-        if isinstance(node, ast.AnnAssign) and isinstance(after, ast.Expr):
-            if isinstance(after.value, ast.Constant) and isinstance(after.value.value, str):
-                docs[node.target.id] = " ".join(after.value.value.split())  # type: ignore[union-attr]
+    for node, after in itertools.pairwise(body):
+        documented = isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant)
+        if isinstance(node, ast.AnnAssign) and documented and isinstance(after.value.value, str):
+            docs[node.target.id] = " ".join(after.value.value.split())  # type: ignore[union-attr]
     return docs
 
 
@@ -227,19 +233,30 @@ def generated(name: str) -> str:
     return GENERATORS[key](argument)
 
 
-def regenerate(text: str) -> str:
-    """``text`` with every generated part written anew."""
-    return MARKER.sub(lambda m: m[1] + generated(m["name"]) + m[4], text)
+def regenerate(text: str, errors: list[str] | None = None) -> str:
+    """``text`` with every generated part written anew. With ``errors``, a part that cannot be
+    generated keeps its text and its error is added there; without, it raises."""
+
+    def part(match: re.Match[str]) -> str:
+        try:
+            return match[1] + generated(match["name"]) + match[4]
+        except Exception as error:
+            if errors is None:
+                raise
+            errors.append(f"{match['name']}: {type(error).__name__}: {error}")
+            return match[0]
+
+    return MARKER.sub(part, text)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true", help="only list the stale pages")
     args = parser.parse_args(argv)
-    stale = []
+    stale, errors = [], []
     for page in PAGES:
         text = page.read_text()
-        new = regenerate(text)
+        new = regenerate(text, errors)
         if new != text:
             stale.append(page.relative_to(ROOT))
             if not args.check:
@@ -247,7 +264,9 @@ def main(argv: list[str] | None = None) -> int:
     verb = "stale (run python docs/generate.py)" if args.check else "rewritten"
     for page in stale:
         print(f"{page}: {verb}")
-    return 1 if args.check and stale else 0
+    for error in errors:
+        print(f"cannot generate {error}", file=sys.stderr)
+    return 1 if errors or (args.check and stale) else 0
 
 
 if __name__ == "__main__":

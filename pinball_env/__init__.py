@@ -12,6 +12,14 @@ the table source ``"generated"``) with Gymnasium::
     env = gym.make("Pinball-v0", table="classic", obs_type="state")
     envs = gym.make_vec("Pinball-v0", num_envs=1024)  # the native vector env, PinballVectorEnv
     env = gym.make("PinballProcgen-v0", num_layouts=16, start_layout=0, difficulty="easy")
+
+The package, bottom up (imports run one way: ``tests/test_house.py``): ``physics`` (the numba
+kernels), ``table`` (tables as validated data), ``procgen`` (generated tables), ``sim`` (the
+World of N envs, the pymunk backend), ``game`` (the rules over N envs), ``options``,
+``observation``, ``envs`` (the Gymnasium shells), ``wrappers`` (stable-baselines3), ``render``,
+``players`` (the scripted baselines), ``recording`` (the play tool's recordings), ``protocol``
+(the benchmark protocol) and ``tools`` (``python -m pinball_env.tools.NAME``). The
+documentation's pages: ``docs/`` (``python -m mkdocs serve``).
 """
 
 from gymnasium.envs.registration import register
@@ -30,7 +38,7 @@ ENVS = {
     "Pinball-v1": "the whole cabinet (the player's plunger, the nudge and the tilt), rules and "
     "targets",
     "Pinball-v2": "v1's game with a tilt that any sustained nudging trips: the benchmark's env",
-    "PinballProcgen-v0": "a generated table every game (``num_layouts``, ``difficulty``, ...)",
+    "PinballProcgen-v0": "a generated table every game (`num_layouts`, `difficulty`, ...)",
 }
 TABLES = {"Pinball-v0": None, "Pinball-v1": "classic_v1", "Pinball-v2": "classic_v2",
           "PinballProcgen-v0": GENERATED}  # fmt: skip

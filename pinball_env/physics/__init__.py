@@ -7,6 +7,10 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 - ``flipper.py``: swept contact with a rotating flipper (a kinematic tapered capsule);
 - ``step.py``: the world step over a batch of envs, split into named helpers;
 - ``near.py``: the broad phase, each ball's candidate set of the elements it can reach soon;
+- ``rays.py``: ray casts from the ball against walls, posts and flippers (the observation's rays);
+- ``cabinet.py``: the cabinet (a mass-spring-damper that a nudge shoves) and its plumb bob;
+- ``targets.py``: drop targets, spinners and kickbacks, and every crossing (sensors, the drain,
+  spinner and kickback lines, the drop targets' sweep);
 - ``data.py``: the kernel's data (``Geometry``, ``Settings``, ``State``, ``Scratch``) and their
   constructors ``make_state`` and ``make_scratch``;
 - ``columns.py``: what each column of those arrays means.
