@@ -77,7 +77,7 @@ def actions(env_id: str) -> str:
     """An env's discrete actions, by number, and its buttons (``action_type="multibinary"``)."""
     env = gym.make(env_id)
     meanings = env.unwrapped.get_action_meanings()
-    buttons = gym.make(env_id, action_type="multibinary").unwrapped.button_names
+    buttons = env.unwrapped.game.button_names
     env.close()
     rows = [(number, f"`{name}`") for number, name in enumerate(meanings)]
     text = _table(("action", "name"), rows)
@@ -98,10 +98,15 @@ def observation(env_id: str) -> str:
     )  # fmt: skip
 
 
-def _field_docs(cls: type) -> dict[str, str]:
-    """The docstring under each field of dataclass ``cls`` (its source's string after it)."""
-    body = ast.parse(inspect.getsource(cls)).body[0].body  # type: ignore[attr-defined]
+def _field_docs(cls: type, inherited: bool = False) -> dict[str, str]:
+    """The docstring under each field of dataclass ``cls`` (its source's string after it); with
+    ``inherited``, its bases' fields' too."""
     docs = {}
+    if inherited:
+        for base in reversed(cls.__mro__[1:]):
+            if dataclasses.is_dataclass(base):
+                docs.update(_field_docs(base))
+    body = ast.parse(inspect.getsource(cls)).body[0].body  # type: ignore[attr-defined]
     for node, after in itertools.pairwise(body):
         documented = isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant)
         if isinstance(node, ast.AnnAssign) and documented and isinstance(after.value.value, str):
@@ -153,28 +158,75 @@ def rules_schema(_: str = "") -> str:
 # --- agents and results --------------------------------------------------------------------------
 
 
-def _first_sentence(text: str) -> str:
-    text = " ".join(str(text).split())
-    end = text.find(". ")
-    return text if end < 0 else text[: end + 1]
+def _training(config: object, rllib: bool) -> str:
+    """What a config trains on, in a few words: its envs, observation and training aids."""
+    env = config.env  # type: ignore[attr-defined]
+    options = env.kwargs
+    words = [f"{env.num_envs} envs" + (" per runner" if rllib else "")]
+    if options.get("obs_type", "state") != "state":
+        words.append(
+            f"{options['obs_type']} images"
+            + (f" x{env.frame_stack}" if env.frame_stack > 1 else "")
+        )
+    if getattr(config, "imitation_steps", 0):
+        words.append(f"warm start {config.imitation_steps / 1e6:g}M steps")  # type: ignore[attr-defined]
+    if getattr(config, "kl_anchor_coef", 0):
+        words.append(f"KL anchor {config.kl_anchor_coef:g}")  # type: ignore[attr-defined]
+    for key, label in (
+        ("repeat_action_probability", "sticky"),
+        ("frame_skip", "frame skip"),
+        ("skip_above", "skip above"),
+        ("drain_penalty", "drain penalty"),
+        ("height_shaping", "height shaping"),
+        ("bonus_shaping", "bonus shaping"),
+    ):
+        if options.get(key):
+            words.append(f"{label} {options[key]:g}")
+    if options.get("nudge_actions") is False:
+        words.append("no nudges")
+    if env.normalize:
+        words.append("VecNormalize")
+    if getattr(config, "validate_every", 0):
+        words.append("validation games")
+    return ", ".join(words)
 
 
 def configs(_: str = "") -> str:
-    """Every training config in ``configs/agents/``: algorithm, env, budget and what it is."""
-    from agents.config import load_config
+    """Every training config in ``configs/agents/``: algorithm, env, budget, the benchmark's
+    methods that train it, and what it trains on."""
+    from agents.benchmark.methods import METHODS
+    from agents.config import RllibConfig, TrainConfig, load_config
 
     rows = []
     for path in sorted(CONFIGS.glob("*.yaml")):
-        raw = yaml.safe_load(path.read_text())
-        if "algo" not in raw and "base" not in raw:
-            continue
-        config = load_config(path)
-        budget = getattr(config, "total_frames", None) or config.total_timesteps
-        unit = "frames" if getattr(config, "total_frames", None) else "steps"
-        rows.append((f"`{path.name}`", getattr(config, "algo", "ppo").upper(),
-                     f"`{config.env.id}`", f"{budget / 1e6:g}M {unit}",
-                     _first_sentence(raw.get("notes", ""))))  # fmt: skip
-    return _table(("config", "algorithm", "env", "budget", "what"), rows)
+        rllib = "env_runners" in yaml.safe_load(path.read_text())  # (agents.rllib's)
+        config = load_config(path, kind=RllibConfig if rllib else TrainConfig)
+        algorithm = config.algo.upper() + (" (RLlib)" if rllib else "")
+        frames = getattr(config, "total_frames", 0)
+        budget = (
+            f"{frames / 1e6:g}M frames" if frames else f"{config.total_timesteps / 1e6:g}M steps"
+        )
+        methods = ", ".join(name for name, m in METHODS.items() if m.config == path.name) or "-"
+        rows.append((f"`{path.name}`", algorithm, f"`{config.env.id}`", budget, methods,
+                     _training(config, rllib)))  # fmt: skip
+    return _table(("config", "algorithm", "env", "budget", "benchmark methods", "trains on"), rows)
+
+
+def config_keys(_: str = "") -> str:
+    """Every key of a training config, with its default and meaning (``agents.config``)."""
+    from agents.config import EnvConfig, RllibConfig, TrainConfig
+
+    rows = []
+    for prefix, cls, note in (("", TrainConfig, ""), ("", RllibConfig, "(RLlib) "),
+                              ("env.", EnvConfig, "")):  # fmt: skip
+        docs = _field_docs(cls, inherited=cls is not RllibConfig)  # (RLlib's own keys only)
+        for spec in dataclasses.fields(cls):
+            if spec.name in docs:
+                default = spec.default
+                if default is dataclasses.MISSING:
+                    default = spec.default_factory()  # type: ignore[misc]
+                rows.append((f"`{prefix}{spec.name}`", f"`{default!r}`", note + docs[spec.name]))
+    return _table(("key", "default", "meaning"), rows)
 
 
 def pretrained(_: str = "") -> str:
@@ -219,6 +271,7 @@ GENERATORS: dict[str, Callable[[str], str]] = {
     "table-schema": table_schema,
     "rules-schema": rules_schema,
     "configs": configs,
+    "config-keys": config_keys,
     "pretrained": pretrained,
     "results": results,
     "references": references,
