@@ -51,7 +51,7 @@ MAX_MULTIPLIER = 100
 MAX_COUNT = 10**6  # a counter's ``at`` and a count's ``by``
 
 
-def _names(
+def known_names(
     value: object, loc: Where, known: Iterable[str], what: str, min_len: int = 1
 ) -> tuple[str, ...]:
     """A name or a list of names, each one of ``known`` (a ``what``)."""
@@ -74,7 +74,7 @@ TIMER_FIELDS = {
     "name": string,
     "time": partial(number, low=0.0, high=600.0, open_low=True, unit="s"),
     "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
-    "elements": partial(_names, known=(), what="element", min_len=0),
+    "elements": partial(known_names, known=(), what="element", min_len=0),
 }
 # A rule's ``when`` holds one trigger (rules.TRIGGER_KEYS) and these keys; each effect of its
 # ``do`` holds one effect (rules.EFFECT_KEYS) and these. A mapping declares a mapping's keys
@@ -188,7 +188,7 @@ def _named(
     kind, many = spec
     if not many and not isinstance(value, str):
         loc.fail(f"expected the name of a {_KIND_WORDS[kind]}, got {describe(value)}")
-    return _names(value, loc, known[kind], _KIND_WORDS[kind])
+    return known_names(value, loc, known[kind], _KIND_WORDS[kind])
 
 
 def _trigger(value: object, loc: Where, known: Mapping[str, Any]) -> Trigger:
