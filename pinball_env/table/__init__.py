@@ -11,6 +11,8 @@
   (``load_table``) and generated tables (``load_any_table``; generators such as
   ``pinball_env.procgen`` register their names' prefixes with ``register_generator``);
 - ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
+- ``reference.py``: the reference of the table files (``schema_fields``, ``rule_keys``,
+  ``schema_limits``), read from the schema's declarations for the documentation.
 """
 
 from pinball_env.table.fields import MAX_BALL_SPEED, TableError

@@ -17,18 +17,29 @@ from pinball_env.table.model import Cabinet, Sensor, Tilt
 MAX_SHOVE_SPEED = 1.0  # fastest a shove may set the cabinet moving [m/s]
 MAX_RATE_PER_SUBSTEP = 0.5  # most of sqrt(k/M), c/M, sqrt(g/L), bob damping times a substep
 
+CABINET_FIELDS = {
+    "mass": partial(number, low=10.0, high=1000.0, unit="kg"),
+    "stiffness": partial(number, low=1.0, high=1e7, unit="N/m"),
+    "damping": partial(number, low=0.0, high=1e6, unit="N s/m"),
+    "nudge_impulse": partial(number, low=0.0, high=500.0, open_low=True, unit="N s"),
+    "nudge_interval": partial(number, low=0.05, high=10.0, unit="s"),
+}
+TILT_FIELDS = {
+    "bob_length": partial(number, low=0.02, high=1.0, unit="m"),  # VPX's bob is 0.1 m
+    "bob_damping": partial(number, low=0.0, high=100.0, unit="1/s"),
+    # Small angles: the bob's swing is integrated as a pendulum's.
+    "ring_angle": partial(number, low=0.0, high=30.0, open_low=True, unit="deg"),
+    "ring_restitution": partial(number, low=0.0, high=1.0),
+    "warnings": partial(number, low=0, high=10, integer=True),
+    "warning_time": partial(number, low=0.5, high=600.0, unit="s"),
+    "settle_time": partial(number, low=0.0, high=60.0, unit="s"),
+}
+
 
 def parse_cabinet(value: object, loc: Where, substep: float) -> Cabinet:
     """The ``cabinet`` section: a shove no faster than MAX_SHOVE_SPEED, rates stable over a
     ``substep`` [s]."""
-    parsers = {
-        "mass": partial(number, low=10.0, high=1000.0),  # [kg]
-        "stiffness": partial(number, low=1.0, high=1e7),  # [N/m]
-        "damping": partial(number, low=0.0, high=1e6),  # [N s/m]
-        "nudge_impulse": partial(number, low=0.0, high=500.0, open_low=True),  # [N s]
-        "nudge_interval": partial(number, low=0.05, high=10.0),  # [s]
-    }
-    cabinet = record(Cabinet, value, loc, parsers)
+    cabinet = record(Cabinet, value, loc, CABINET_FIELDS)
     if cabinet.nudge_impulse / cabinet.mass > MAX_SHOVE_SPEED:
         loc.key("nudge_impulse").fail(
             f"a shove of {cabinet.nudge_impulse:g} N s sets the {cabinet.mass:g} kg cabinet "
@@ -43,16 +54,7 @@ def parse_cabinet(value: object, loc: Where, substep: float) -> Cabinet:
 
 def parse_tilt(value: object, loc: Where, substep: float, gravity: float) -> Tilt:
     """The ``tilt`` section: the bob's rates stable over a ``substep`` [s] under ``gravity``."""
-    parsers = {
-        "bob_length": partial(number, low=0.02, high=1.0),  # [m]: VPX's bob is 0.1 m
-        "bob_damping": partial(number, low=0.0, high=100.0),  # [1/s]
-        "ring_angle": partial(number, low=0.0, high=30.0, open_low=True),  # [deg], small angles
-        "ring_restitution": partial(number, low=0.0, high=1.0),
-        "warnings": partial(number, low=0, high=10, integer=True),
-        "warning_time": partial(number, low=0.5, high=600.0),  # [s]
-        "settle_time": partial(number, low=0.0, high=60.0),  # [s]
-    }
-    tilt = record(Tilt, value, loc, parsers)
+    tilt = record(Tilt, value, loc, TILT_FIELDS)
     if tilt.settle_time >= tilt.warning_time:
         loc.key("settle_time").fail(
             f"{tilt.settle_time:g} s is not shorter than warning_time ({tilt.warning_time:g} s): "

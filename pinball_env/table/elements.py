@@ -6,6 +6,10 @@ known materials, kickers that lose energy, and the geometry checks of
 
 A value outside a range is a typo (or an attack): it would make the ball, the table or the work
 of a frame absurd.
+
+Each record's keys are declared once, at module level (``WALL_FIELDS``, ``FLIPPER_FIELDS``, ...):
+the parsers, with :data:`~pinball_env.table.fields.POINT` where the table's point parser goes;
+:mod:`pinball_env.table.reference` documents the table files from them.
 """
 
 from __future__ import annotations
@@ -16,8 +20,10 @@ from functools import partial
 from typing import Any
 
 from pinball_env.table.fields import (
+    POINT,
     Parser,
     Where,
+    bound,
     choice,
     describe,
     flag,
@@ -28,6 +34,7 @@ from pinball_env.table.fields import (
     pair,
     point_list,
     record,
+    records,
     score,
     short,
     string,
@@ -66,11 +73,110 @@ MAX_SENSORS = 256
 MAX_DROP_TARGETS = 64  # over all banks
 MAX_SPINNERS = 16
 MAX_KICKBACKS = 8
+MAX_SWING = 90.0  # a flipper's |up_angle - rest_angle| [deg]
+MAX_KICKBACK_SPEED = 10.0  # a real kickback fires the ball at a few m/s [m/s]
 
-_post_radius = partial(number, low=0.001, high=1.0)  # [m]
-_flipper_length = partial(number, low=0.01, high=1.0)  # [m]: a real flipper is ~70 mm
-_flipper_radius = partial(number, low=0.001, high=0.1)  # [m]
-_kick = partial(number, low=0.0, high=10.0)  # [m/s]: a real pop bumper adds ~1.5 m/s
+_flipper_radius = partial(number, low=0.001, high=0.1, unit="m")
+_kick = partial(number, low=0.0, high=10.0, unit="m/s")  # a real pop bumper adds ~1.5 m/s
+_angle = partial(number, low=-360.0, high=360.0, unit="deg")
+
+
+def _two_points(value: object, loc: Where, point: Parser) -> tuple[tuple[float, float], ...]:
+    """list of 2 points in the playfield [m], apart"""
+    points = point_list(value, loc, point, 2, 2)
+    check_lengths([(*points[0], *points[1])], loc)
+    return points
+
+
+# The keys of each record, in file order, and their parsers.
+MATERIAL_FIELDS = {
+    # At most 1: a bounce never adds energy (kicks do, see _check_kickers).
+    "restitution": partial(number, low=0.0, high=1.0),
+    "friction": partial(number, low=0.0, high=2.0),
+}
+WALL_FIELDS = {
+    "name": string,
+    "points": partial(point_list, point=POINT, min_len=2, max_len=MAX_POINTS),
+    "closed": flag,
+    "material": string,
+    "one_sided": flag,
+    "kick": _kick,
+    "score": score,
+}
+POST_FIELDS = {
+    "name": string,
+    "center": POINT,
+    "radius": partial(number, low=0.001, high=1.0, unit="m"),
+    "material": string,
+    "kick": _kick,
+    "score": score,
+}
+FLIPPER_FIELDS = {
+    "name": string,
+    "pivot": POINT,
+    "length": partial(number, low=0.01, high=1.0, unit="m"),  # a real flipper is ~70 mm
+    "base_radius": _flipper_radius,
+    "tip_radius": _flipper_radius,
+    "rest_angle": _angle,
+    "up_angle": _angle,
+    "stroke_time": partial(number, low=0.005, high=0.2, unit="s"),
+    "return_time": partial(number, low=0.005, high=0.5, unit="s"),
+    "material": string,
+    "button": partial(choice, options=BUTTONS),
+    "score": score,
+}
+SENSOR_FIELDS = {
+    "name": string,
+    "points": partial(point_list, point=POINT, min_len=2, max_len=2),
+    "drain": flag,
+    "score": score,
+}
+SKILL_SHOT_FIELDS = {
+    "sensor": string,
+    "bonus": score,
+    "time": partial(number, low=0.1, high=60.0, unit="s"),
+}
+_speed = partial(pair, item=partial(number, low=0.0, high=20.0, open_low=True, unit="m/s"))
+PLUNGER_FIELDS = {
+    "position": POINT,
+    "speed": _speed,
+    "stroke": partial(number, low=0.005, high=0.2, unit="m"),  # a real one pulls ~5 cm
+    "pull_time": partial(number, low=0.05, high=5.0, unit="s"),
+    "pull_speed": _speed,
+    "scatter": partial(number, low=0.0, high=1.0, unit="m/s"),
+    "skill_shot": partial(record, SkillShot, parsers=SKILL_SHOT_FIELDS),
+}
+STANDUP_FIELDS = {
+    "name": string,
+    "points": partial(_two_points, point=POINT),
+    "material": string,
+    "score": score,
+}
+DROP_TARGET_FIELDS = {"name": string, "points": partial(_two_points, point=POINT), "score": score}
+DROP_BANK_FIELDS = {
+    "name": string,
+    "material": string,
+    "targets": partial(
+        records, DropTarget, parsers=DROP_TARGET_FIELDS, min_len=1, max_len=MAX_DROP_TARGETS
+    ),
+    # At least a few frames, so that the rules see the bank down before it rises.
+    "reset_time": partial(number, low=0.1, high=60.0, unit="s"),
+}
+SPINNER_FIELDS = {
+    "name": string,
+    "points": partial(_two_points, point=POINT),
+    "radius": partial(number, low=0.002, high=0.1, unit="m"),  # a real flap is ~15 mm
+    "damping": partial(number, low=0.0, high=50.0, unit="1/s"),
+    "friction": partial(number, low=0.0, high=1000.0, unit="rad/s^2"),
+    "score": score,
+}
+KICKBACK_FIELDS = {
+    "name": string,
+    "points": partial(_two_points, point=POINT),
+    "kick": velocity_pair,
+    "lit": flag,
+    "score": score,
+}
 
 
 def parse_elements(
@@ -78,15 +184,7 @@ def parse_elements(
 ) -> dict[str, tuple[Any, ...]]:
     """The walls, posts, flippers and sensors, by group name (the Table's fields), checked
     together: unique names, known materials, no flipper pivot in a wall."""
-    post_parsers = {
-        "name": string,
-        "center": point,
-        "radius": _post_radius,
-        "material": string,
-        "kick": _kick,
-        "score": score,
-    }
-    post = partial(record, Post, parsers=post_parsers)
+    post = partial(record, Post, parsers=bound(POST_FIELDS, point))
     elements = {
         "walls": _group(raw, top, "walls", partial(_wall, point=point), MAX_SEGMENTS),
         "posts": _group(raw, top, "posts", post, MAX_POSTS),
@@ -123,65 +221,27 @@ def parse_materials(value: object, loc: Where) -> tuple[Material, ...]:
         loc.fail(f"expected a mapping of at least one material, got {describe(value)}")
     if len(value) > MAX_POSTS:
         loc.fail(f"{len(value)} materials, at most {MAX_POSTS} allowed")
-    parsers = {
-        # At most 1: a bounce never adds energy (kicks do, see _check_kickers).
-        "restitution": partial(number, low=0.0, high=1.0),
-        "friction": partial(number, low=0.0, high=2.0),
-    }
     return tuple(
-        record(Material, item, loc.key(string(name, loc)), parsers, name=name)
+        record(Material, item, loc.key(string(name, loc)), MATERIAL_FIELDS, name=name)
         for name, item in value.items()
     )
 
 
 def _wall(value: object, loc: Where, point: Parser) -> Wall:
-    parsers = {
-        "closed": flag,
-        "material": string,
-        "one_sided": flag,
-        "kick": _kick,
-        "score": score,
-    }
-    wall = _line(Wall, value, loc, point, MAX_POINTS, parsers)
+    wall = record(Wall, value, loc, bound(WALL_FIELDS, point))
     if wall.closed and len(wall.points) < 3:
         loc.fail(f"a closed polyline needs at least 3 points, got {len(wall.points)}")
     check_lengths(wall.segments(), loc)
     return wall
 
 
-def _line(
-    cls: type, value: object, loc: Where, point: Parser, max_points: int, parsers: dict[str, Parser]
-) -> Any:
-    """A wall or a sensor: ``cls`` with a name, 2 to ``max_points`` points and ``parsers``' keys."""
-    points = partial(point_list, point=point, min_len=2, max_len=max_points)
-    return record(cls, value, loc, {"name": string, "points": points, **parsers})
-
-
 def _flipper(value: object, loc: Where, point: Parser) -> Flipper:
-    angle = partial(number, low=-360.0, high=360.0)
-    flipper = record(
-        Flipper,
-        value,
-        loc,
-        {
-            "name": string,
-            "pivot": point,
-            "length": _flipper_length,
-            "base_radius": _flipper_radius,
-            "tip_radius": _flipper_radius,
-            "rest_angle": angle,
-            "up_angle": angle,
-            "stroke_time": partial(number, low=0.005, high=0.2),
-            "return_time": partial(number, low=0.005, high=0.5),
-            "material": string,
-            "button": partial(choice, options=BUTTONS),
-            "score": score,
-        },
-    )
+    flipper = record(Flipper, value, loc, bound(FLIPPER_FIELDS, point))
     swing = abs(flipper.up_angle - flipper.rest_angle)
-    if not 0.0 < swing <= 90.0:
+    if not 0.0 < swing <= MAX_SWING:
         loc.key("up_angle").fail(
-            f"flipper swing must be in (0, 90] degrees, got {swing:g} (|up_angle - rest_angle|)"
+            f"flipper swing must be in (0, {MAX_SWING:g}] degrees, got {swing:g} "
+            "(|up_angle - rest_angle|)"
         )
     taper = abs(flipper.base_radius - flipper.tip_radius)
     if taper >= flipper.length:
@@ -193,7 +253,7 @@ def _flipper(value: object, loc: Where, point: Parser) -> Flipper:
 
 
 def _sensor(value: object, loc: Where, point: Parser) -> Sensor:
-    sensor = _line(Sensor, value, loc, point, 2, {"drain": flag, "score": score})
+    sensor = record(Sensor, value, loc, bound(SENSOR_FIELDS, point))
     check_lengths([sensor.segment], loc)
     return sensor
 
@@ -201,17 +261,7 @@ def _sensor(value: object, loc: Where, point: Parser) -> Sensor:
 def parse_plunger(value: object, loc: Where, point: Parser) -> Plunger:
     """The ``plunger``: a machine's (a launch speed range) or the player's (stroke, pull_time
     and pull_speed together, and then a scatter and a skill shot if any)."""
-    speed = partial(pair, item=partial(number, low=0.0, high=20.0, open_low=True))
-    parsers = {
-        "position": point,
-        "speed": speed,
-        "stroke": partial(number, low=0.005, high=0.2),  # [m]: a real one pulls ~5 cm
-        "pull_time": partial(number, low=0.05, high=5.0),  # [s]
-        "pull_speed": speed,
-        "scatter": partial(number, low=0.0, high=1.0),  # [m/s]
-        "skill_shot": _skill_shot,
-    }
-    plunger = record(Plunger, value, loc, parsers)
+    plunger = record(Plunger, value, loc, bound(PLUNGER_FIELDS, point))
     for key in ("speed", "pull_speed"):
         if getattr(plunger, key) is not None:
             low, high = getattr(plunger, key)
@@ -232,15 +282,6 @@ def parse_plunger(value: object, loc: Where, point: Parser) -> Plunger:
             f"{plunger.pull_speed[0]:g} m/s launch (it must be smaller)"
         )
     return plunger
-
-
-def _skill_shot(value: object, loc: Where) -> SkillShot:
-    parsers = {
-        "sensor": string,
-        "bonus": score,
-        "time": partial(number, low=0.1, high=60.0),  # [s]
-    }
-    return record(SkillShot, value, loc, parsers)
 
 
 def _check_elements(
@@ -282,81 +323,25 @@ def _check_kickers(
 # --- targets and rules ---------------------------------------------------------------------------
 
 
-def _two_points(value: object, loc: Where, point: Parser) -> tuple[tuple[float, float], ...]:
-    points = point_list(value, loc, point, 2, 2)
-    check_lengths([(*points[0], *points[1])], loc)
-    return points
-
-
-def _standup(value: object, loc: Where, point: Parser) -> StandupTarget:
-    parsers = {
-        "name": string,
-        "points": partial(_two_points, point=point),
-        "material": string,
-        "score": score,
-    }
-    return record(StandupTarget, value, loc, parsers)
-
-
-def _drop_bank(value: object, loc: Where, point: Parser) -> DropBank:
-    target_parsers = {"name": string, "points": partial(_two_points, point=point), "score": score}
-
-    def targets(items: object, where: Where) -> tuple[DropTarget, ...]:
-        items = list_of(items, where, 1, MAX_DROP_TARGETS)
-        return tuple(
-            record(DropTarget, item, where.index(i, name_of(item)), target_parsers)
-            for i, item in enumerate(items)
-        )
-
-    parsers = {
-        "name": string,
-        "material": string,
-        "targets": targets,
-        # [s]: at least a few frames, so that the rules see the bank down before it rises
-        "reset_time": partial(number, low=0.1, high=60.0),
-    }
-    return record(DropBank, value, loc, parsers)
-
-
-def _spinner(value: object, loc: Where, point: Parser) -> Spinner:
-    parsers = {
-        "name": string,
-        "points": partial(_two_points, point=point),
-        "radius": partial(number, low=0.002, high=0.1),  # [m]: a real flap is ~15 mm
-        "damping": partial(number, low=0.0, high=50.0),  # [1/s]
-        "friction": partial(number, low=0.0, high=1000.0),  # [rad/s^2]
-        "score": score,
-    }
-    return record(Spinner, value, loc, parsers)
-
-
 def _kickback(value: object, loc: Where, point: Parser) -> Kickback:
-    parsers = {
-        "name": string,
-        "points": partial(_two_points, point=point),
-        "kick": velocity_pair,
-        "lit": flag,
-        "score": score,
-    }
-    kickback = record(Kickback, value, loc, parsers)
-    if not 0.0 < math.hypot(*kickback.kick) <= 10.0:
+    kickback = record(Kickback, value, loc, bound(KICKBACK_FIELDS, point))
+    if not 0.0 < math.hypot(*kickback.kick) <= MAX_KICKBACK_SPEED:
         loc.key("kick").fail(
-            f"kick speed {math.hypot(*kickback.kick):g} m/s must be in (0, 10] (a real kickback "
-            "fires the ball at a few m/s)"
+            f"kick speed {math.hypot(*kickback.kick):g} m/s must be in (0, {MAX_KICKBACK_SPEED:g}] "
+            "(a real kickback fires the ball at a few m/s)"
         )
     return kickback
 
 
 def _target_groups(raw: Mapping[str, Any], top: Where, point: Parser) -> dict[str, tuple[Any, ...]]:
     """The stand-up targets, drop banks, spinners and kickbacks, by group name."""
+    standup = partial(record, StandupTarget, parsers=bound(STANDUP_FIELDS, point))
+    drop_bank = partial(record, DropBank, parsers=bound(DROP_BANK_FIELDS, point))
+    spinner = partial(record, Spinner, parsers=bound(SPINNER_FIELDS, point))
     groups = {
-        "standup_targets": _group(
-            raw, top, "standup_targets", partial(_standup, point=point), MAX_SEGMENTS
-        ),
-        "drop_targets": _group(
-            raw, top, "drop_targets", partial(_drop_bank, point=point), MAX_DROP_TARGETS
-        ),
-        "spinners": _group(raw, top, "spinners", partial(_spinner, point=point), MAX_SPINNERS),
+        "standup_targets": _group(raw, top, "standup_targets", standup, MAX_SEGMENTS),
+        "drop_targets": _group(raw, top, "drop_targets", drop_bank, MAX_DROP_TARGETS),
+        "spinners": _group(raw, top, "spinners", spinner, MAX_SPINNERS),
         "kickbacks": _group(raw, top, "kickbacks", partial(_kickback, point=point), MAX_KICKBACKS),
     }
     n_targets = sum(len(bank.targets) for bank in groups["drop_targets"])

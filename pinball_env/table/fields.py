@@ -1,6 +1,8 @@
 """Generic field parsing for table descriptions: where a value sits, and the kinds of value a
 table file holds (mappings with known keys, lists, names, flags, numbers in a range, pairs,
-points in the playfield), each with the one error format of a table.
+points in the playfield), each with the one error format of a table; the declarations that
+records are parsed by (:func:`record`, :func:`records`, :data:`POINT` and :func:`bound`), which
+:mod:`pinball_env.table.reference` reads to document them.
 
 The kinds themselves (:func:`is_int`, :func:`is_real`, :func:`is_flag`, :func:`is_finite`) are
 pinball_env's one vocabulary: :mod:`pinball_env.checks` phrases the options' errors over them.
@@ -169,8 +171,10 @@ def number(
     open_low: bool = False,
     open_high: bool = False,
     integer: bool = False,
+    unit: str = "",
 ) -> float | int:
-    """A finite real (or, with ``integer``, an int) in the given interval."""
+    """A finite real (or, with ``integer``, an int) in the given interval. ``unit`` only
+    documents the field (the table reference shows it); the messages keep their own wording."""
     if not (is_int(value) if integer else is_real(value)):
         hint = ""
         if isinstance(value, str) and _parses_as_float(value):
@@ -239,6 +243,14 @@ def point_list(
     return tuple(point(p, loc.index(i)) for i, p in enumerate(items))
 
 
+def name_list(
+    value: object, loc: Where, min_len: int = 0, max_len: int | None = None
+) -> tuple[str, ...]:
+    """A list of ``min_len`` to ``max_len`` names."""
+    items = list_of(value, loc, min_len, max_len)
+    return tuple(string(item, loc.index(i)) for i, item in enumerate(items))
+
+
 def record(
     cls: type, value: object, loc: Where, parsers: Mapping[str, Parser], **extra: Any
 ) -> Any:
@@ -246,6 +258,47 @@ def record(
     required = [f.name for f in fields(cls) if f.name in parsers and f.default is MISSING]
     raw = mapping(value, loc, required, parsers)
     return cls(**{key: parsers[key](raw[key], loc.key(key)) for key in raw}, **extra)
+
+
+def records(
+    cls: type,
+    value: object,
+    loc: Where,
+    parsers: Mapping[str, Parser],
+    min_len: int = 0,
+    max_len: int | None = None,
+) -> tuple[Any, ...]:
+    """A list of ``min_len`` to ``max_len`` records ``cls``, each at its path ``[i] 'name'``."""
+    items = list_of(value, loc, min_len, max_len)
+    return tuple(
+        record(cls, item, loc.index(i, name_of(item)), parsers) for i, item in enumerate(items)
+    )
+
+
+# Named as a constant: it is a marker in declarations, never called on a value.
+def POINT(value: object, loc: Where) -> NoReturn:
+    """A point in the playfield [m]: the marker a declaration puts where the table's ``point``
+    parser goes, which :func:`bound` puts in at parse time (the playfield's size is only known
+    then)."""
+    raise AssertionError(f"{loc.path}: POINT was not bound to the table's point parser")
+
+
+def bound(parsers: Mapping[str, Parser], point: Parser) -> dict[str, Parser]:
+    """``parsers`` with :data:`POINT` replaced by ``point``, also where a partial holds it (as
+    ``point=POINT`` or within nested ``parsers``)."""
+    return {key: _bind(parser, point) for key, parser in parsers.items()}
+
+
+def _bind(parser: Any, point: Parser) -> Any:
+    if parser is POINT:
+        return point
+    if isinstance(parser, Mapping):
+        return bound(parser, point)
+    if isinstance(parser, partial):
+        keywords = {key: _bind(value, point) for key, value in parser.keywords.items()}
+        if any(keywords[key] is not value for key, value in parser.keywords.items()):
+            return partial(parser.func, *parser.args, **keywords)
+    return parser
 
 
 def name_of(item: object) -> object:

@@ -29,45 +29,62 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+
+@dataclass(frozen=True)
+class Keyword:
+    """A trigger or effect of a table file: what it names (the kind of name: elements, banks,
+    lights, buttons, counters, timers or kickbacks, and whether a list is allowed; None: it takes
+    a number instead) and what it means (the table reference shows it)."""
+
+    names: tuple[str, bool] | None
+    meaning: str
+
+
+# The triggers and effects, in the order the error messages list them; the parser, the writer
+# and the table reference all read these.
+TRIGGER_KEYS: dict[str, Keyword] = {
+    "hit": Keyword(
+        ("elements", True),
+        "any of the named elements is hit: a sensor crossed, a target or bumper struck, a "
+        "spinner's revolution, a kickback's line crossed",
+    ),
+    "bank": Keyword(("banks", False), "the named drop bank's last target falls"),
+    "flipper": Keyword(("buttons", False), "a flipper button (left, right or any) is pressed"),
+    "timer_ends": Keyword(("timers", False), "the named timer runs out"),
+    "lights_on": Keyword(("lights", True), "the named lights become all lit"),
+    "counter": Keyword(
+        ("counters", False), "the named counter reaches `at`; it then starts again from 0"
+    ),
+}
+EFFECT_KEYS: dict[str, Keyword] = {
+    "light": Keyword(("lights", True), "light the named lights"),
+    "unlight": Keyword(("lights", True), "put the named lights out"),
+    "rotate": Keyword(
+        ("lights", True),
+        "the lights (at least two) pass their states one place on, the last's to the first "
+        '(a "lane change")',
+    ),
+    "count": Keyword(("counters", False), "add `by` (default 1) to the named counter"),
+    "start_timer": Keyword(
+        ("timers", False),
+        "the named timer runs for its time again; while it runs, the points of its elements "
+        "are multiplied by its factor",
+    ),
+    "score": Keyword(None, "score this many points now"),
+    "bonus": Keyword(None, "add this many points to the end-of-ball bonus"),
+    "multiplier": Keyword(None, "raise the bonus multiplier by this much, up to max_multiplier"),
+    "light_kickback": Keyword(("kickbacks", False), "light the named kickback"),
+    "extra_ball": Keyword(None, "award this many extra balls"),
+}
+TRIGGERS = tuple(TRIGGER_KEYS)
+EFFECTS = tuple(EFFECT_KEYS)
 # Triggers set off by the physics or the player, and those set off by other rules' effects.
 EVENT_TRIGGERS = ("hit", "bank", "flipper", "timer_ends")
-RULE_TRIGGERS = ("lights_on", "counter")
-TRIGGERS = EVENT_TRIGGERS + RULE_TRIGGERS
-EFFECTS = (
-    "light",
-    "unlight",
-    "rotate",
-    "count",
-    "start_timer",
-    "score",
-    "bonus",
-    "multiplier",
-    "light_kickback",
-    "extra_ball",
-)
+RULE_TRIGGERS = tuple(key for key in TRIGGERS if key not in EVENT_TRIGGERS)
 FLIPPER_BUTTONS = ("left", "right", "any")
-# What each trigger and effect names in a table file: the kind of name (elements, banks, lights,
-# buttons, counters, timers, kickbacks) and whether a list is allowed; None: a number instead.
-TRIGGER_NAMES: dict[str, tuple[str, bool]] = {
-    "hit": ("elements", True),
-    "bank": ("banks", False),
-    "lights_on": ("lights", True),
-    "flipper": ("buttons", False),
-    "counter": ("counters", False),
-    "timer_ends": ("timers", False),
-}
-EFFECT_NAMES: dict[str, tuple[str, bool] | None] = {
-    "light": ("lights", True),
-    "unlight": ("lights", True),
-    "rotate": ("lights", True),
-    "count": ("counters", False),
-    "start_timer": ("timers", False),
-    "light_kickback": ("kickbacks", False),
-    "score": None,
-    "bonus": None,
-    "multiplier": None,
-    "extra_ball": None,
-}
+# What each trigger and effect names (see Keyword.names).
+TRIGGER_NAMES = {key: keyword.names for key, keyword in TRIGGER_KEYS.items()}
+EFFECT_NAMES = {key: keyword.names for key, keyword in EFFECT_KEYS.items()}
 # Events that are no rule's but are reported with them (``info["rule_events"]``).
 BALL_SAVED = "ball saved"
 BONUS_SCORED = "end-of-ball bonus"

@@ -1,7 +1,11 @@
 """The ``rules`` section of a table description: lights, counters, timers and the rules that
 name them, parsed into a :class:`~pinball_env.table.rules.RuleSet` (the rules' data model) with
 every name checked against what the table declares, and a ring of rules that could fire for ever
-in one frame refused."""
+in one frame refused.
+
+The section's keys are declared at module level (``RULES_FIELDS`` and the records' maps under
+it; the triggers and effects in :mod:`pinball_env.table.rules`), which
+:mod:`pinball_env.table.reference` documents."""
 
 from __future__ import annotations
 
@@ -11,16 +15,19 @@ from typing import Any
 
 from pinball_env.table.fields import (
     MAX_SCORE,
+    POINT,
     Parser,
     Where,
+    bound,
     describe,
     flag,
     list_of,
     listing,
     mapping,
+    name_list,
     name_of,
     number,
-    record,
+    records,
     short,
     string,
 )
@@ -41,9 +48,10 @@ from pinball_env.table.rules import (
 
 MAX_RULES = 256  # and as many lights, counters, timers
 MAX_MULTIPLIER = 100
+MAX_COUNT = 10**6  # a counter's ``at`` and a count's ``by``
 
 
-def _names(
+def known_names(
     value: object, loc: Where, known: Iterable[str], what: str, min_len: int = 1
 ) -> tuple[str, ...]:
     """A name or a list of names, each one of ``known`` (a ``what``)."""
@@ -59,12 +67,44 @@ def _names(
     return tuple(items)
 
 
+# The keys of the section and of its records, in file order, and their parsers. A timer's
+# ``known`` elements are the table's, given at parse time.
+LIGHT_FIELDS = {"name": string, "at": POINT, "lit": flag}
+TIMER_FIELDS = {
+    "name": string,
+    "time": partial(number, low=0.0, high=600.0, open_low=True, unit="s"),
+    "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
+    "elements": partial(known_names, known=(), what="element", min_len=0),
+}
+# A rule's ``when`` holds one trigger (rules.TRIGGER_KEYS) and these keys; each effect of its
+# ``do`` holds one effect (rules.EFFECT_KEYS) and these. A mapping declares a mapping's keys
+# (each parsed by the code below), a list of one mapping a list of such mappings.
+WHEN_FIELDS = {"at": partial(number, low=1, high=MAX_COUNT, integer=True)}
+DO_FIELDS = {"by": partial(number, low=1, high=MAX_COUNT, integer=True)}
+DO_DEFAULTS = {"by": 1}
+# The number that each effect without names (rules.EFFECT_KEYS) takes.
+EFFECT_NUMBERS = {
+    "score": partial(number, low=1, high=MAX_SCORE, integer=True),
+    "bonus": partial(number, low=1, high=MAX_SCORE, integer=True),
+    "multiplier": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
+    "extra_ball": partial(number, low=1, high=10, integer=True),
+}
+RULE_FIELDS = {"name": string, "when": WHEN_FIELDS, "do": [DO_FIELDS]}
+RULES_FIELDS = {
+    "lights": partial(records, Light, parsers=LIGHT_FIELDS, max_len=MAX_RULES),
+    "counters": partial(name_list, max_len=MAX_RULES),
+    "timers": partial(records, Timer, parsers=TIMER_FIELDS, max_len=MAX_RULES),
+    "max_multiplier": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
+    "rules": [RULE_FIELDS],
+}
+
+
 def parse_rules(
     value: object, loc: Where, point: Parser, names: Mapping[str, tuple[str, ...]]
 ) -> RuleSet:
     """The ``rules`` section; ``names`` lists the table's names of each kind (elements, banks,
     kickbacks) that rules may refer to."""
-    raw = mapping(value, loc, [], ["lights", "counters", "timers", "max_multiplier", "rules"])
+    raw = mapping(value, loc, [], RULES_FIELDS)
     lights, counters, timers = _declarations(raw, loc, point, names["elements"])
     known = {
         **names,
@@ -72,8 +112,8 @@ def parse_rules(
         "counters": counters,
         "timers": tuple(x.name for x in timers),
     }
-    max_multiplier = number(
-        raw.get("max_multiplier", 1), loc.key("max_multiplier"), 1, MAX_MULTIPLIER, integer=True
+    max_multiplier = RULES_FIELDS["max_multiplier"](
+        raw.get("max_multiplier", RuleSet.max_multiplier), loc.key("max_multiplier")
     )
     items = list_of(raw.get("rules", []), loc.key("rules"), 0, MAX_RULES)
     rules = tuple(
@@ -93,28 +133,11 @@ def _declarations(
 ) -> tuple[tuple[Light, ...], tuple[str, ...], tuple[Timer, ...]]:
     """The lights, counters and timers that the rules name, each name given once; a timer's
     ``elements`` are among the table's ``elements``."""
-
-    def listed(key: str) -> list[Any]:
-        return list_of(raw.get(key, []), loc.key(key), 0, MAX_RULES)
-
-    light_parsers = {"name": string, "at": point, "lit": flag}
-    lights = tuple(
-        record(Light, item, loc.key("lights").index(i, name_of(item)), light_parsers)
-        for i, item in enumerate(listed("lights"))
-    )
-    counters = tuple(
-        string(item, loc.key("counters").index(i)) for i, item in enumerate(listed("counters"))
-    )
-    timer_parsers = {
-        "name": string,
-        "time": partial(number, low=0.0, high=600.0, open_low=True),  # [s]
-        "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
-        "elements": partial(_names, known=elements, what="element", min_len=0),
-    }
-    timers = tuple(
-        record(Timer, item, loc.key("timers").index(i, name_of(item)), timer_parsers)
-        for i, item in enumerate(listed("timers"))
-    )
+    fields = bound(RULES_FIELDS, point)
+    lights = fields["lights"](raw.get("lights", []), loc.key("lights"))
+    counters = fields["counters"](raw.get("counters", []), loc.key("counters"))
+    timer_fields = {**TIMER_FIELDS, "elements": partial(TIMER_FIELDS["elements"], known=elements)}
+    timers = fields["timers"](raw.get("timers", []), loc.key("timers"), parsers=timer_fields)
     for key, items in (("lights", [x.name for x in lights]), ("counters", list(counters)),
                        ("timers", [x.name for x in timers])):  # fmt: skip
         if len(set(items)) != len(items):
@@ -134,7 +157,7 @@ def _check_no_ring(rule_set: RuleSet, loc: Where) -> None:
 
 
 def _rule(value: object, loc: Where, known: Mapping[str, tuple[str, ...]]) -> Rule:
-    raw = mapping(value, loc, ["name", "when", "do"])
+    raw = mapping(value, loc, RULE_FIELDS)
     name = string(raw["name"], loc.key("name"))
     when = _trigger(raw["when"], loc.key("when"), known)
     effects = list_of(raw["do"], loc.key("do"), 1, MAX_RULES)
@@ -165,31 +188,29 @@ def _named(
     kind, many = spec
     if not many and not isinstance(value, str):
         loc.fail(f"expected the name of a {_KIND_WORDS[kind]}, got {describe(value)}")
-    return _names(value, loc, known[kind], _KIND_WORDS[kind])
+    return known_names(value, loc, known[kind], _KIND_WORDS[kind])
 
 
 def _trigger(value: object, loc: Where, known: Mapping[str, Any]) -> Trigger:
-    kind = _one_key(value, loc, TRIGGERS, ("at",))
+    kind = _one_key(value, loc, TRIGGERS, tuple(WHEN_FIELDS))
     names = _named(value[kind], loc.key(kind), TRIGGER_NAMES[kind], known)
     if ("at" in value) != (kind == "counter"):
         loc.fail("'at' goes with a counter trigger, and a counter trigger needs it")
-    at = number(value["at"], loc.key("at"), 1, 10**6, integer=True) if kind == "counter" else 0
+    at = WHEN_FIELDS["at"](value["at"], loc.key("at")) if kind == "counter" else 0
     return Trigger(kind, names, at)
 
 
 def _effect(value: object, loc: Where, known: Mapping[str, Any]) -> Effect:
-    kind = _one_key(value, loc, EFFECTS, ("by",))
+    kind = _one_key(value, loc, EFFECTS, tuple(DO_FIELDS))
     if "by" in value and kind != "count":
         loc.fail("'by' goes with a count effect only")
     spec = EFFECT_NAMES[kind]
     if spec is None:
-        high = {"score": MAX_SCORE, "bonus": MAX_SCORE, "multiplier": MAX_MULTIPLIER,
-                "extra_ball": 10}[kind]  # fmt: skip
-        return Effect(kind, (), number(value[kind], loc.key(kind), 1, high, integer=True))
+        return Effect(kind, (), EFFECT_NUMBERS[kind](value[kind], loc.key(kind)))
     names = _named(value[kind], loc.key(kind), spec, known)
     if kind == "rotate" and len(names) < 2:
         loc.key(kind).fail("rotate needs at least two lights")
-    by = number(value.get("by", 1), loc.key("by"), 1, 10**6, integer=True)
+    by = DO_FIELDS["by"](value.get("by", DO_DEFAULTS["by"]), loc.key("by"))
     return Effect(kind, names, by if kind == "count" else 0)
 
 

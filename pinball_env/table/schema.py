@@ -7,6 +7,9 @@ missing key, wrong type, non-finite or out-of-range number, bad geometry) raises
 problem; nothing is silently defaulted. The parts have modules of their own: ``fields`` (the
 kinds of value), ``elements``, ``cabinet``, ``rules_schema`` (the ``rules`` section) and
 ``geometry`` (the checks that tie places together); ``serialise`` writes a table back.
+
+:data:`TABLE_FIELDS` declares the top level's keys in file order (the sections' own maps come
+from those modules); :mod:`pinball_env.table.reference` documents the table files from it.
 """
 
 from __future__ import annotations
@@ -15,49 +18,116 @@ from collections.abc import Mapping
 from functools import partial
 from typing import Any
 
-from pinball_env.table.cabinet import check_whole_cabinet, parse_cabinet, parse_tilt
+from pinball_env.table import elements as el
+from pinball_env.table.cabinet import (
+    CABINET_FIELDS,
+    TILT_FIELDS,
+    check_whole_cabinet,
+    parse_cabinet,
+    parse_tilt,
+)
 from pinball_env.table.elements import parse_elements, parse_materials, parse_plunger
 from pinball_env.table.fields import (
+    POINT,
     Parser,
     Where,
+    bound,
     in_playfield,
     mapping,
     number,
     record,
+    records,
     short,
     string,
     velocity_pair,
 )
 from pinball_env.table.geometry import check_launch_path, check_placed
-from pinball_env.table.model import Ball, BallSave, Simulation, Table
-from pinball_env.table.rules_schema import parse_rules, rule_names
+from pinball_env.table.model import (
+    Ball,
+    BallSave,
+    Cabinet,
+    DropBank,
+    Flipper,
+    Kickback,
+    Material,
+    Plunger,
+    Post,
+    Sensor,
+    Simulation,
+    Spinner,
+    StandupTarget,
+    Table,
+    Tilt,
+    Wall,
+)
+from pinball_env.table.rules import RuleSet
+from pinball_env.table.rules_schema import RULES_FIELDS, parse_rules, rule_names
 
 # Physically sensible ranges of the top level's numbers.
-_playfield_size = partial(number, low=0.05, high=5.0)  # [m]: a real playfield is ~0.5 x 1 m
-_ball_radius = partial(number, low=0.002, high=0.1)  # [m]: a real ball is 13.5 mm
-_ball_mass = partial(number, low=0.001, high=10.0)  # [kg]: a real ball is 80 g
-_gravity = partial(number, low=0.0, high=100.0, open_low=True)  # [m/s^2]: Earth's 9.81
+_playfield_size = partial(number, low=0.05, high=5.0, unit="m")  # a real one is ~0.5 x 1 m
+PLAYFIELD_FIELDS = {"width": _playfield_size, "height": _playfield_size}
+BALL_FIELDS = {
+    "radius": partial(number, low=0.002, high=0.1, unit="m"),  # a real ball is 13.5 mm
+    "mass": partial(number, low=0.001, high=10.0, unit="kg"),  # a real ball is 80 g
+    "start": POINT,
+    "velocity": velocity_pair,
+}
+SIMULATION_FIELDS = {
+    "frame_rate": partial(number, low=1.0, high=1000.0, unit="1/s"),
+    "substeps": partial(number, low=1, high=100, integer=True),
+    "max_passes": partial(number, low=1, high=100, integer=True),
+    "skin": partial(number, low=1e-8, high=1e-4, unit="m"),
+    "resting_speed": partial(number, low=0.0, high=1.0, unit="m/s"),
+}
+BALL_SAVE_FIELDS = {"time": partial(number, low=0.0, high=60.0, open_low=True, unit="s")}
+
+
+def _elements(cls: type, fields: Mapping[str, Any], max_len: int) -> Parser:
+    """The declaration of a group of elements (each parsed, and checked, in ``elements``)."""
+    return partial(records, cls, parsers=fields, max_len=max_len)
+
+
+# The keys of the top-level mapping in file order: a parser, the declaration of a record (a
+# partial of ``record`` or ``records``) or a mapping (``playfield``, whose keys are all required,
+# and ``materials``, of any names). ``playfield`` holds Table.width and Table.height; the element
+# groups and sections are parsed by their modules' code from the same maps.
+TABLE_FIELDS: dict[str, Any] = {
+    "name": string,
+    "playfield": PLAYFIELD_FIELDS,
+    "slope_deg": partial(number, low=0.0, high=90.0, open_high=True, unit="deg"),
+    "gravity": partial(number, low=0.0, high=100.0, open_low=True, unit="m/s^2"),  # Earth's 9.81
+    "ball": partial(record, Ball, parsers=BALL_FIELDS),
+    "materials": {"NAME": partial(record, Material, parsers=el.MATERIAL_FIELDS)},
+    "walls": _elements(Wall, el.WALL_FIELDS, el.MAX_SEGMENTS),
+    "posts": _elements(Post, el.POST_FIELDS, el.MAX_POSTS),
+    "flippers": _elements(Flipper, el.FLIPPER_FIELDS, el.MAX_FLIPPERS),
+    "sensors": _elements(Sensor, el.SENSOR_FIELDS, el.MAX_SENSORS),
+    "plunger": partial(record, Plunger, parsers=el.PLUNGER_FIELDS),
+    "cabinet": partial(record, Cabinet, parsers=CABINET_FIELDS),
+    "tilt": partial(record, Tilt, parsers=TILT_FIELDS),
+    "standup_targets": _elements(StandupTarget, el.STANDUP_FIELDS, el.MAX_SEGMENTS),
+    "drop_targets": _elements(DropBank, el.DROP_BANK_FIELDS, el.MAX_DROP_TARGETS),
+    "spinners": _elements(Spinner, el.SPINNER_FIELDS, el.MAX_SPINNERS),
+    "kickbacks": _elements(Kickback, el.KICKBACK_FIELDS, el.MAX_KICKBACKS),
+    "ball_save": partial(record, BallSave, parsers=BALL_SAVE_FIELDS),
+    "rules": partial(record, RuleSet, parsers=RULES_FIELDS),
+    "simulation": partial(record, Simulation, parsers=SIMULATION_FIELDS),
+}
 
 
 def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     """Validate a table description (as read from YAML) into a :class:`Table`."""
     source = source if len(source) <= 200 else short(source)
     top = Where(source)
-    raw = mapping(data, top, ["name", "playfield", "ball", "materials"], _TOP_KEYS)
-    playfield = mapping(raw["playfield"], top.key("playfield"), ["width", "height"])
+    raw = mapping(data, top, ["name", "playfield", "ball", "materials"], TABLE_FIELDS)
+    playfield = mapping(raw["playfield"], top.key("playfield"), PLAYFIELD_FIELDS)
     width = _playfield_size(playfield["width"], top.key("playfield").key("width"))
     height = _playfield_size(playfield["height"], top.key("playfield").key("height"))
     point = partial(in_playfield, width=width, height=height)
     materials = parse_materials(raw["materials"], top.key("materials"))
     elements = parse_elements(raw, top, point, materials)
     ball_loc = top.key("ball")
-    ball_parsers = {
-        "radius": _ball_radius,
-        "mass": _ball_mass,
-        "start": point,
-        "velocity": velocity_pair,
-    }
-    ball = record(Ball, raw["ball"], ball_loc, ball_parsers)
+    ball = record(Ball, raw["ball"], ball_loc, bound(BALL_FIELDS, point))
     check_placed(ball.start, ball.radius, elements, ball_loc.key("start"))
     return Table(
         name=string(raw["name"], top.key("name")),
@@ -86,21 +156,12 @@ def _sections(
         check_placed(plunger.position, ball.radius, elements, position_loc)
         check_launch_path(plunger, elements["walls"], top)
     if "slope_deg" in raw:
-        sections["slope_deg"] = number(
-            raw["slope_deg"], top.key("slope_deg"), 0.0, 90.0, open_high=True
-        )
+        sections["slope_deg"] = TABLE_FIELDS["slope_deg"](raw["slope_deg"], top.key("slope_deg"))
     if "gravity" in raw:
-        sections["gravity"] = _gravity(raw["gravity"], top.key("gravity"))
+        sections["gravity"] = TABLE_FIELDS["gravity"](raw["gravity"], top.key("gravity"))
     if "simulation" in raw:
-        simulation_parsers = {
-            "frame_rate": partial(number, low=1.0, high=1000.0),
-            "substeps": partial(number, low=1, high=100, integer=True),
-            "max_passes": partial(number, low=1, high=100, integer=True),
-            "skin": partial(number, low=1e-8, high=1e-4),  # [m]
-            "resting_speed": partial(number, low=0.0, high=1.0),  # [m/s]
-        }
-        sections["simulation"] = record(
-            Simulation, raw["simulation"], top.key("simulation"), simulation_parsers
+        sections["simulation"] = TABLE_FIELDS["simulation"](
+            raw["simulation"], top.key("simulation")
         )
     substep = 1.0 / (
         sections.get("simulation", Simulation()).frame_rate
@@ -113,38 +174,7 @@ def _sections(
         sections["tilt"] = parse_tilt(raw["tilt"], top.key("tilt"), substep, gravity)
     check_whole_cabinet(sections, elements["sensors"], top)
     if "ball_save" in raw:
-        sections["ball_save"] = _ball_save(raw["ball_save"], top.key("ball_save"))
+        sections["ball_save"] = TABLE_FIELDS["ball_save"](raw["ball_save"], top.key("ball_save"))
     if "rules" in raw:
         sections["rules"] = parse_rules(raw["rules"], top.key("rules"), point, rule_names(elements))
     return sections
-
-
-# Keys of the top-level mapping; ``playfield`` holds Table.width and Table.height.
-_TOP_KEYS = (
-    "name",
-    "playfield",
-    "slope_deg",
-    "gravity",
-    "ball",
-    "materials",
-    "walls",
-    "posts",
-    "flippers",
-    "sensors",
-    "plunger",
-    "cabinet",
-    "tilt",
-    "standup_targets",
-    "drop_targets",
-    "spinners",
-    "kickbacks",
-    "ball_save",
-    "rules",
-    "simulation",
-)
-
-
-def _ball_save(value: object, loc: Where) -> BallSave:
-    return record(
-        BallSave, value, loc, {"time": partial(number, low=0.0, high=60.0, open_low=True)}
-    )
