@@ -9,6 +9,7 @@ every env at once (the single env is a batch of one).
 
 import functools
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
@@ -25,7 +26,7 @@ from pinball_env.physics.columns import (
     CABINET_Y,
     SPIN_ANGLE,
 )
-from pinball_env.physics.rays import cast_all_rays
+from pinball_env.physics.rays import RAY_RANGE, cast_all_rays
 from pinball_env.render import Renderer, TargetsView
 from pinball_env.sim.tables import flipper_numbers
 from pinball_env.table import Table
@@ -42,6 +43,25 @@ MAX_OBS_CABINET_SPEED = 1.0
 # The rules' rows give the bonus in thousands of points and counters as counts, clipped to these.
 MAX_OBS_BONUS = 100.0
 MAX_OBS_COUNT = 100.0
+
+
+@dataclass(frozen=True)
+class ObservationRow:
+    """One entry of a state observation: what it is, its bounds (the space's float32 numbers)
+    and its unit ("" for none)."""
+
+    meaning: str
+    low: float
+    high: float
+    unit: str
+
+
+def flipper_names(table: Table) -> list[str]:
+    """Each flipper as the observation's rows name it, in the table's order: by its button
+    ("left flipper") where that is the only flipper on its button, else by its own name too."""
+    buttons = [f.button for f in table.flippers]
+    return [f"{f.button} flipper" if buttons.count(f.button) == 1
+            else f"flipper {f.name} ({f.button} button)" for f in table.flippers]  # fmt: skip
 
 
 class StateObserver:
@@ -61,35 +81,79 @@ class StateObserver:
         self.space = spaces.Box(low, high, dtype=np.float32)
         self._ray_distances = np.zeros((game.n_envs, rays), dtype=np.float32)
 
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of one env's observation (float32, one entry per feature)."""
+    def rows(self) -> tuple[ObservationRow, ...]:
+        """One env's observation, entry by entry in order: what each is, its bounds and unit.
+        The one declaration of the bounds (:meth:`bounds` reads them from here), so that the
+        documentation's table of them is the space itself."""
         table, balls = self.game.table, float(self.game.balls_per_game)
+        norm = self.normalised
         _, _, swing, top_speed = flipper_numbers(table)
-        n = len(swing)
-        speeds = [-MAX_OBS_SPEED, MAX_OBS_SPEED]
-        if self.normalised:
-            low = [0.0, 0.0, speeds[0], speeds[0]] + [0.0] * n + [-1.0] * n + [0.0, 0.0]
-            high = [1.0, 1.0, speeds[1], speeds[1]] + [1.0] * (2 * n) + [1.0, balls]
-        else:
-            low = np.concatenate([[0.0, 0.0, speeds[0], speeds[0]], np.zeros(n), -top_speed,
-                                  [0.0, 0.0]])  # fmt: skip
-            high = np.concatenate([[table.width, table.height, speeds[1], speeds[1]], swing,
-                                   top_speed, [1.0, balls]])  # fmt: skip
-        if self.game.cabinet:
-            stroke = 1.0 if self.normalised else table.plunger.stroke
-            offset, speed = MAX_OBS_CABINET_OFFSET, MAX_OBS_CABINET_SPEED
-            low = np.concatenate([low, [0.0, 0.0, -offset, -offset, -speed, -speed, 0.0, 0.0]])
-            high = np.concatenate(
-                [high, [stroke, 1.0, offset, offset, speed, speed, table.tilt.warnings + 1, 1.0]]
-            )
-        rules = self.game.table.rules
-        if rules is not None:  # the rules' rows (see rule_observation)
-            counts = self.rule_counts()
-            low = np.concatenate([low, np.zeros(sum(counts[:-1])), [1.0, 0.0]])
-            tops = [1.0] * sum(counts[:4]) + [MAX_OBS_COUNT] * counts[4]
-            high = np.concatenate([high, tops, [rules.max_multiplier, MAX_OBS_BONUS]])
-        low = np.concatenate([low, np.zeros(self.rays)]).astype(np.float32)
-        high = np.concatenate([high, np.ones(self.rays)]).astype(np.float32)
+        speed = MAX_OBS_SPEED
+        rows = [
+            ("ball x", 0.0, 1.0 if norm else table.width, "table widths" if norm else "m"),
+            ("ball y (up the table)", 0.0, 1.0 if norm else table.height,
+             "table heights" if norm else "m"),
+            (f"ball vx (clipped to +-{speed:g})", -speed, speed, "m/s"),
+            (f"ball vy (clipped to +-{speed:g})", -speed, speed, "m/s"),
+        ]  # fmt: skip
+        names = flipper_names(table)
+        rows += [(f"{name} angle above rest", 0.0, 1.0 if norm else top,
+                  "swings" if norm else "rad")
+                 for name, top in zip(names, swing, strict=True)]  # fmt: skip
+        rows += [(f"{name} angular velocity, + going up", -1.0 if norm else -top,
+                  1.0 if norm else top, "top speeds" if norm else "rad/s")
+                 for name, top in zip(names, top_speed, strict=True)]  # fmt: skip
+        rows += [
+            ("ball in play (1) or game over (0)", 0.0, 1.0, ""),
+            ("balls left, the one in play included", 0.0, balls, ""),
+        ]
+        if self.game.cabinet:  # as cabinet_observation
+            offset, cabinet_speed = MAX_OBS_CABINET_OFFSET, MAX_OBS_CABINET_SPEED
+            rows += [
+                ("plunger pull", 0.0, 1.0 if norm else table.plunger.stroke,
+                 "strokes" if norm else "m"),
+                ("ball waiting on the plunger (1) or not (0)", 0.0, 1.0, ""),
+                (f"cabinet offset x (clipped to +-{offset:g})", -offset, offset, "m"),
+                (f"cabinet offset y, up the table (clipped to +-{offset:g})", -offset, offset, "m"),
+                (f"cabinet velocity x (clipped to +-{cabinet_speed:g})", -cabinet_speed,
+                 cabinet_speed, "m/s"),
+                (f"cabinet velocity y (clipped to +-{cabinet_speed:g})", -cabinet_speed,
+                 cabinet_speed, "m/s"),
+                ("tilt warnings standing", 0.0, table.tilt.warnings + 1.0, ""),
+                ("tilted (1) or not (0)", 0.0, 1.0, ""),
+            ]  # fmt: skip
+        rules = table.rules
+        if rules is not None:  # as rule_observation
+            count = f"(clipped to {MAX_OBS_COUNT:g})"
+            rows += [(f"light {x.name} lit (1) or not (0)", 0.0, 1.0, "") for x in rules.lights]
+            rows += [(f"drop target {x.name} up (1) or down (0)", 0.0, 1.0, "")
+                     for x in table.drop_target_list]  # fmt: skip
+            rows += [(f"kickback {x.name} lit (1) or not (0)", 0.0, 1.0, "")
+                     for x in table.kickbacks]  # fmt: skip
+            rows += [(f"timer {x.name}: share of its {x.time:g} s left", 0.0, 1.0, "")
+                     for x in rules.timers]  # fmt: skip
+            rows += [(f"counter {x} {count}", 0.0, MAX_OBS_COUNT, "") for x in rules.counters]
+            rows += [
+                ("bonus multiplier", 1.0, float(rules.max_multiplier), "x"),
+                (f"end-of-ball bonus, in thousands (clipped to {MAX_OBS_BONUS:g})", 0.0,
+                 MAX_OBS_BONUS, "1000 points"),
+            ]  # fmt: skip
+        for k in range(self.rays):  # as ray_directions: evenly round the circle from +x
+            direction = 360.0 * k / self.rays
+            rows.append((f"ray {k} distance (direction {direction:.4g} deg from +x)", 0.0, 1.0,
+                         f"{RAY_RANGE:g} m"))  # fmt: skip
+        # The bounds as the float32 space holds them, so that a row is exactly the space's.
+        return tuple(
+            ObservationRow(meaning, float(np.float32(low)), float(np.float32(high)), unit)
+            for meaning, low, high, unit in rows
+        )
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of one env's observation (float32, one entry per feature):
+        :meth:`rows`'."""
+        rows = self.rows()
+        low = np.array([row.low for row in rows], dtype=np.float32)
+        high = np.array([row.high for row in rows], dtype=np.float32)
         return low, high
 
     def observe(self) -> np.ndarray:
@@ -291,10 +355,12 @@ __all__ = [
     "MAX_OBS_COUNT",
     "MAX_OBS_SPEED",
     "ImageObserver",
+    "ObservationRow",
     "Observer",
     "StateObserver",
     "TableRenderers",
     "cabinet_observation",
+    "flipper_names",
     "make_observer",
     "state_observation",
     "targets_view",

@@ -12,7 +12,13 @@ from gymnasium import spaces
 
 from pinball_env.envs.layouts import Layouts, frame_size
 from pinball_env.game import Game
-from pinball_env.observation import TableRenderers, make_observer, targets_view
+from pinball_env.observation import (
+    ObservationRow,
+    StateObserver,
+    TableRenderers,
+    make_observer,
+    targets_view,
+)
 from pinball_env.options import PinballOptions
 from pinball_env.render import (
     SHAKE_EXAGGERATION,
@@ -220,6 +226,19 @@ class CoreAttributes:
     @property
     def rays(self) -> int:
         return self.core.options.rays
+
+    @property
+    def observation_rows(self) -> tuple[ObservationRow, ...]:
+        """One env's state observation, entry by entry (``StateObserver.rows``): what each is,
+        its bounds (the observation space's) and unit. An AttributeError for image
+        observations, whose entries are pixels."""
+        observer = self.core.observer
+        if not isinstance(observer, StateObserver):
+            raise AttributeError(
+                f"observation_rows describes the state observation; this env's obs_type is "
+                f"{self.obs_type!r} (pixels): make it with obs_type='state'"
+            )
+        return observer.rows()
 
     @property
     def reward_scale(self) -> float:

@@ -131,7 +131,8 @@ class PinballEnv(CoreAttributes, gym.Env):
     | 27    | bonus multiplier                              | 1     | 5     | x      |
     | 28    | end-of-ball bonus (clipped to 100)            | 0     | 100   | 1000 points |
 
-    ``rays`` come after these rows.
+    ``rays`` come after these rows. ``observation_rows`` gives every row of the env as made
+    (meaning, min, max, unit), from the declaration its space is built from.
 
     ``obs_type="rgb"``: a ``Box(0, 255, (84, 84, 3), uint8)`` picture of the whole table (stretched
     to the image), drawn without a display; ``obs_type="grayscale"``: the same as
