@@ -46,37 +46,22 @@ class EnvAttribute:
 
 
 class PinballVectorEnv(CoreAttributes, VectorEnv):
-    """``num_envs`` games of ``Pinball-v0`` in one batch (see ``PinballEnv`` for the game,
-    its spaces, rewards and infos).
+    """``num_envs`` games of any pinball env in one batch (``gym.make_vec("Pinball-v2",
+    num_envs=1024)``): ``PinballEnv``'s game, spaces, rewards and options, for N envs.
 
     ## Arguments
 
-    ```python
-    gym.make_vec("Pinball-v0", num_envs=1024, table="classic", obs_type="state",
-                 action_type="discrete", balls=3, reward_scale=0.01, height_shaping=0.0,
-                 drain_penalty=0.0, bonus_shaping=0.0, frame_skip=1, skip_above=0.0,
-                 repeat_action_probability=0.0, max_frames=None, image_size=(84, 84),
-                 physics="swept", render_mode=None, max_episode_steps=7200, num_threads=None,
-                 autoreset_mode="NextStep")
-    ```
-
-    Every argument of ``PinballEnv`` (``PinballOptions``; and its ``metadata["render_fps"]``,
-    the int of ``steps_per_second``), plus those of ``pinball_env.options.VectorOptions``:
-
-    - ``num_envs``: games stepped together.
-    - ``max_episode_steps``: truncation after this many steps of an episode (None: never);
-      ``gym.make_vec`` passes the registered 7200 (with ``frame_skip=k``, pass 7200 // k for
-      the same two minutes, or None and ``max_frames=7200``, which counts frames whatever the
-      frame skip or ``skip_above``).
-    - ``num_threads``: threads that share the envs (None: one per core while each has at least
-      32 envs). Results are bitwise the same for any count.
-    - ``autoreset_mode`` (Gymnasium's ``AutoresetMode`` or its value): ``NEXT_STEP``
-      (Gymnasium's default: an env that ended is reset by the next ``step``, which ignores its
-      action and returns the reset observation, reward 0), ``SAME_STEP`` (reset in the same
-      step; the last observation and info of the episode are in ``info["final_obs"]`` and
-      ``info["final_info"]``, masked by ``_final_obs``) or ``DISABLED`` (no automatic reset:
-      reset the envs that ended with ``reset(options={"reset_mask": mask})`` before the next
-      step, which raises ``AssertionError`` otherwise, as ``SyncVectorEnv`` does).
+    Every option of ``PinballEnv`` (:class:`~pinball_env.options.PinballOptions`) and those of
+    :class:`~pinball_env.options.VectorOptions` (``num_envs``, ``max_episode_steps``,
+    ``num_threads``, ``autoreset_mode``); the documentation's page "The environments" has the
+    table of them, generated from those declarations. Results are bitwise the same for any
+    ``num_threads``. ``autoreset_mode``: ``NEXT_STEP`` (Gymnasium's default: an env that ended
+    is reset by the next ``step``, which ignores its action and returns the reset observation,
+    reward 0), ``SAME_STEP`` (reset in the same step; the last observation and info of the
+    episode are in ``info["final_obs"]`` and ``info["final_info"]``, masked by
+    ``_final_obs``) or ``DISABLED`` (no automatic reset: reset the envs that ended with
+    ``reset(options={"reset_mask": mask})`` before the next step, which raises
+    ``AssertionError`` otherwise, as ``SyncVectorEnv`` does).
 
     With ``table="generated"`` (``PinballProcgen-v0``) each env plays its own table, all stepped
     in one kernel call; ``reset(options={"layout": L})`` plays layout ``L`` in every env reset,
