@@ -3,7 +3,10 @@ every env at once (the single env is a batch of one).
 
 - :class:`StateObserver`: ball x, y, vx, vy; each flipper's angle above rest and angular
   velocity towards up; ball in play; balls left (in table units, or normalised to the table so
-  that they mean the same on every table), and optionally ray distances (``physics.rays``);
+  that they mean the same on every table); the cabinet's and the rules' rows where the table
+  has them, and optionally ray distances (``physics.rays``). Its :meth:`StateObserver.rows`
+  declare every entry once (:class:`ObservationRow`: meaning, bounds, unit), from which the
+  space's bounds and the documentation's tables are made;
 - :class:`ImageObserver`: the table drawn as an RGB or grayscale picture.
 """
 
