@@ -13,9 +13,9 @@ As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggre
   frame from each game's own random stream, so that no evaluation is a sequence an agent could
   learn by heart.
 - **Training**: :data:`TRAINING_FRAMES` frames per run (all envs' frames, a warm start's
-  included: what the shipped PPO trains in 38 minutes alone on 2 cores), or the long budget,
-  :data:`LONG_TRAINING_FRAMES` (ALE's 200M), each row saying its budget; :data:`TRAINING_SEEDS`
-  (at least 5 per method); training never plays a held-out game.
+  included), or the long budget, :data:`LONG_TRAINING_FRAMES` (ALE's 200M), each row saying its
+  budget; :data:`TRAINING_SEEDS` (5 per method; a published row with fewer says so in its runs
+  column); training never plays a held-out game.
 - **Evaluation**: every run plays the :data:`EVAL_SEEDS` games (held out: seeds 100000-100099),
   its policy deterministic.
 - **Metrics**: the mean and the interquartile mean (IQM) of the score (of all games of all runs
@@ -27,8 +27,8 @@ As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggre
   score where one is recorded (:data:`HUMAN_SCORES`; ``python -m agents.evaluate --recording
   FILE`` scores a play-tool recording on the protocol).
 
-``python -m agents.benchmark`` runs the protocol; the README's "Benchmark protocol" section has
-the table it gives.
+``python -m agents.benchmark`` runs the protocol; the documentation's pages "Benchmark protocol"
+and "Results" (``docs/benchmark.md``, ``docs/results.md``) describe it and give its table.
 """
 
 from collections.abc import Callable, Mapping, Sequence
@@ -59,7 +59,7 @@ TRAINING_FRAMES = 20_000_000
 # cheap (a recipe at the env's speed trains it in about half an hour on 2 cores).
 LONG_TRAINING_FRAMES = 200_000_000
 TRAINING_BUDGETS = (TRAINING_FRAMES, LONG_TRAINING_FRAMES)
-# The training seeds of every method (its config's ``seed``): at least 5.
+# The training seeds of every method (its config's ``seed``).
 TRAINING_SEEDS = (0, 1, 2, 3, 4)
 # The held-out games: no training or validation game is one of them.
 EVAL_SEEDS = range(100_000, 100_100)

@@ -1,4 +1,5 @@
-"""The benchmark's table in words: Markdown (``benchmark.md``, the README's) and the terminal's."""
+"""The benchmark's table in words: Markdown (``benchmark.md``, and the docs' results page, which
+``docs/generate.py`` writes with it) and the terminal's."""
 
 from typing import Any
 
@@ -6,7 +7,7 @@ import numpy as np
 
 
 def markdown_table(methods: dict[str, Any]) -> str:
-    """The table as Markdown (``benchmark.md``, the README's): a row per method."""
+    """The table as Markdown (``benchmark.md``, the docs' results page): a row per method."""
     lines = [
         "| method | env | runs | score: mean [95% CI] | IQM [95% CI] | normalised IQM [95% CI] "
         "| training per run |",

@@ -122,7 +122,7 @@ def test_train_resume_and_evaluate_from_the_command_line(tmp_path, no_ray):
     assert (tmp_path / "e0" / "episodes.csv").read_text() == (
         tmp_path / "e1" / "episodes.csv"
     ).read_text()
-    # The README's example plays the same games through load_policy.
+    # The docs' load_policy example plays the same games through load_policy.
     with open(tmp_path / "e0" / "episodes.csv") as file:
         expected = [int(row["score"]) for row in csv.DictReader(file)]
     assert [readme_example(run, 100_000 + game) for game in range(2)] == expected

@@ -81,7 +81,7 @@ def logged_rows(runs: Path) -> int:
 
 
 def readme_example(path: Path, seed: int) -> int:
-    """The README's "Use a trained agent" example, as a user would write it."""
+    """The docs' load_policy example (getting started, agents), as a user would write it."""
     policy = load_policy(path)
     env = policy.make_env()
     obs, info = env.reset(seed=seed)
