@@ -198,15 +198,19 @@ AnyConfig = TrainConfig | RllibConfig
 
 
 def load_config(
-    path: str | os.PathLike[str], overrides: list[str] = (), kind: type = TrainConfig
+    path: str | os.PathLike[str],
+    overrides: list[str] = (),
+    kind: type = TrainConfig,
+    check: bool = True,
 ) -> AnyConfig:
     """The config (a ``kind``) in the YAML file ``path`` over its ``base`` config if it names
-    one, with ``key=value`` overrides applied, checked."""
+    one, with ``key=value`` overrides applied, checked (``check=False``: its keys only, for
+    reading what it says where its libraries are not installed: the docs' table of configs)."""
     path = Path(path)
     data = _read_config_data(path)
     for item in overrides:
         apply_override(data, item, path)
-    return config_from_dict(data, str(path), kind)
+    return config_from_dict(data, str(path), kind, check)
 
 
 def _read_config_data(path: Path, inside: tuple[Path, ...] = ()) -> dict[str, Any]:
@@ -276,9 +280,10 @@ def load_run_config(run: Path) -> AnyConfig:
 
 
 def config_from_dict(
-    data: dict[str, Any], source: str = "<config>", kind: type = TrainConfig
+    data: dict[str, Any], source: str = "<config>", kind: type = TrainConfig, check: bool = True
 ) -> AnyConfig:
-    """A checked config (:class:`TrainConfig` or :class:`RllibConfig`) from plain data."""
+    """A checked config (:class:`TrainConfig` or :class:`RllibConfig`) from plain data
+    (``check=False``: only its keys checked, see :func:`load_config`)."""
     data = dict(data)
     env_data = data.pop("env", {}) or {}
     if not isinstance(env_data, dict):
@@ -293,7 +298,8 @@ def config_from_dict(
     _check_keys(data, kind, source, "")
     _check_keys(env_data, EnvConfig, source, "env.")
     config = kind(**data, env=EnvConfig(**env_data))
-    check_config(config, source)
+    if check:
+        check_config(config, source)
     return config
 
 

@@ -3,6 +3,7 @@ schedules, and the rl_zoo3 hyperparameters."""
 
 import csv
 import dataclasses
+import sys
 
 import pytest
 import yaml
@@ -145,3 +146,18 @@ def test_rl_zoo3_hyperparameters_are_the_ppo_config():
     assert zoo.pop("n_envs") == config.env.num_envs
     assert zoo.pop("normalize") == config.env.normalize
     assert zoo == hyperparams
+
+
+def test_a_config_reads_unchecked_without_its_libraries(monkeypatch):
+    # The docs' table of configs reads every config, RLlib's too, where Ray is not installed:
+    # unchecked, only its keys are; checked, the missing library is named.
+    from agents.config import RllibConfig
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # as if not installed
+    path = CONFIGS_DIR / "rllib_ppo.yaml"
+    config = load_config(path, kind=RllibConfig, check=False)
+    assert config.env_runners == 2 and config.env.id == "Pinball-v0"
+    with pytest.raises(ConfigError, match="ray is missing"):
+        load_config(path, kind=RllibConfig)
+    with pytest.raises(ConfigError, match="unknown key"):
+        load_config(path, ["no_such_key=1"], kind=RllibConfig, check=False)
