@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
@@ -34,6 +34,32 @@ from pinball_env.table.rules import RuleSet
 # The flipper buttons, in the order of the columns of a buttons array (and of the bits of a
 # discrete action, see ``pinball_env.game``).
 BUTTONS = ("left", "right")
+
+
+Value = TypeVar("Value")
+
+
+class cached(Generic[Value]):
+    """``functools.cached_property`` without the lock Python 3.11 takes: one lock per property,
+    shared by every table and held while the value is computed, so that a process forked while
+    another thread computes one (a generated table checked in the background) waits on it for
+    ever. Two threads may both compute a value; both compute the same, and one is kept."""
+
+    def __init__(self, func: Callable[[Any], Value]) -> None:
+        self.func = func
+        self.__doc__ = func.__doc__
+        self.name = func.__name__
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        if instance is None:
+            return self
+        cache = instance.__dict__  # (a frozen dataclass's too: its __setattr__ is not called)
+        if self.name not in cache:
+            cache[self.name] = self.func(instance)
+        return cache[self.name]
 
 
 @dataclass(frozen=True)
@@ -349,7 +375,7 @@ class Table:
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
     source: str = "<dict>"  # file the table was read from
 
-    @cached_property
+    @cached
     def free_space(self) -> np.ndarray:
         """Grid of where a ball centre can get to in play from the plunger (or the ball's
         start), see :mod:`pinball_env.table.reachable`; computed on first use."""
@@ -362,7 +388,7 @@ class Table:
             geometry.flippers, start, drains,
         )  # fmt: skip
 
-    @cached_property
+    @cached
     def drain_reachable(self) -> bool:
         """Whether a ball in play can get to a drain (so that a game can end): some place it
         can reach (:attr:`free_space`) lies right beside a drain line."""
@@ -404,14 +430,14 @@ class Table:
                 return material
         raise KeyError(f"{self.source}: no material {name!r} in table {self.name!r}")
 
-    @cached_property
+    @cached
     def element_names(self) -> tuple[str, ...]:
         """Name of every element by global id: segments (``"wall[i]"``, then the stand-up
         targets), circles, flippers, sensors, drop targets, spinners and kickbacks."""
         segments = [f"{wall.name}[{i}]" for wall in self.walls for i in range(len(wall.segments()))]
         return (*segments, *(e.name for e in self._named_elements))
 
-    @cached_property
+    @cached
     def element_scores(self) -> np.ndarray:
         """Points per hit of every element by global id, (E,) int64, read-only."""
         segments = [wall.score for wall in self.walls for _ in wall.segments()]

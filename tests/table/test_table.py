@@ -951,3 +951,43 @@ def test_a_table_field_and_an_option_take_the_same_kinds_of_value(value: object)
     )
     assert accepted(lambda: table_from_dict(mass)) == accepted(lambda: checks.finite("m", value))
     assert accepted(lambda: table_from_dict(closed)) == accepted(lambda: checks.flag("c", value))
+
+
+def test_a_fork_while_a_thread_computes_a_table_property_does_not_hang(monkeypatch):
+    # Python 3.11's functools.cached_property held one lock per property, shared by every table,
+    # while computing it: a process forked then (an AsyncVectorEnv's worker, while a generated
+    # table was checked in the background) waited on it for ever.
+    import multiprocessing
+    import threading
+
+    from pinball_env.table import model
+
+    table = load_table("classic")
+    other = dataclasses.replace(table)  # another table, nothing computed yet
+    computing, finish = threading.Event(), threading.Event()
+    free_space = model.free_space
+
+    def slow_free_space(*args: Any) -> Any:
+        computing.set()
+        finish.wait(60)
+        return free_space(*args)
+
+    def child() -> None:  # the forked process computes its own table's free space
+        model.free_space = free_space
+        raise SystemExit(0 if other.drain_reachable else 1)
+
+    monkeypatch.setattr(model, "free_space", slow_free_space)
+    thread = threading.Thread(target=lambda: table.free_space)
+    thread.start()
+    try:
+        assert computing.wait(30)
+        process = multiprocessing.get_context("fork").Process(target=child)
+        process.start()
+        process.join(60)
+        hung = process.exitcode is None
+        if hung:
+            process.kill()
+        assert not hung and process.exitcode == 0
+    finally:
+        finish.set()
+        thread.join()
