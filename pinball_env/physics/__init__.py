@@ -5,6 +5,8 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 
 - ``sweep.py``: swept ball-segment and ball-circle tests, point-segment distance;
 - ``flipper.py``: swept contact with a rotating flipper (a kinematic tapered capsule);
+- ``balls.py``: ball-ball contact, the swept test of two moving balls and the impulsive response
+  (for multiball; not yet called by the world step);
 - ``step.py``: the world step over a batch of envs, split into named helpers;
 - ``near.py``: the broad phase, each ball's candidate set of the elements it can reach soon;
 - ``rays.py``: ray casts from the ball against walls, posts and flippers (the observation's rays);
@@ -16,6 +18,7 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 - ``columns.py``: what each column of those arrays means.
 """
 
+from pinball_env.physics.balls import respond_ball_ball, sweep_ball_ball
 from pinball_env.physics.data import (
     CONTACT_CAPACITY,
     Geometry,
@@ -67,9 +70,11 @@ __all__ = [
     "make_state",
     "point_segment_distance",
     "respond",
+    "respond_ball_ball",
     "segment_bounds",
     "step_tables",
     "step_world",
+    "sweep_ball_ball",
     "sweep_capsule",
     "sweep_circle",
     "sweep_circle_circle",
