@@ -9,6 +9,10 @@ its origin at the bottom-left corner, x to the right and y up the table.
 :meth:`Table.pack_settings` into its :class:`~pinball_env.physics.Settings`. Element ids follow
 the kernel's order (segments, circles, flippers, sensors): :attr:`Table.element_names` and
 :attr:`Table.element_scores` are indexed by them.
+
+The multiball elements (:class:`Saucer`, :class:`Lock`, :class:`Trough`, and the ball-ball
+``Ball.material``) are validated data that the kernel does not take yet: :meth:`Table.pack` and
+the element ids leave them out.
 """
 
 from __future__ import annotations
@@ -214,6 +218,58 @@ class Kickback(_Line):
 
 
 @dataclass(frozen=True)
+class Saucer:
+    """A kickout hole: a ball whose centre comes within ``radius`` of ``center`` slower than
+    ``capture_speed`` is captured (held at ``center``, immovable), scores, and after
+    ``hold_time`` leaves at ``kick``. Not in the kernel yet (:meth:`Table.pack` leaves it out)."""
+
+    name: str
+    center: tuple[float, float]  # where a captured ball rests [m]
+    kick: tuple[float, float]  # the velocity the ball leaves with [m/s]
+    radius: float = 0.02  # capture radius about the centre [m]
+    capture_speed: float = 0.5  # a slower ball within the radius is captured [m/s]
+    hold_time: float = 1.0  # how long it holds the ball [s]
+    score: int = 0  # points per capture [-]
+
+
+@dataclass(frozen=True)
+class Lock:
+    """A ball lock: a ball whose centre comes within ``radius`` of the next free slot slower
+    than ``capture_speed`` is held there (immovable) until a rule releases the lock's balls,
+    which leave their slots at ``kick``. Not in the kernel yet (:meth:`Table.pack` leaves it
+    out)."""
+
+    name: str
+    slots: tuple[tuple[float, float], ...]  # where held balls rest, in fill order [m]
+    kick: tuple[float, float]  # the velocity a released ball leaves with [m/s]
+    radius: float | None = None  # capture radius about the next free slot; None: the ball's [m]
+    capture_speed: float = 1.0  # a slower ball within the radius is held [m/s]
+    score: int = 0  # points per ball locked [-]
+
+    def capture_radius(self, ball_radius: float) -> float:
+        """The capture radius [m]: ``radius``, or the ball's where none is set."""
+        return ball_radius if self.radius is None else self.radius
+
+
+@dataclass(frozen=True)
+class AutoPlunger:
+    """The machine's plunger that launches the extra balls of a multiball from the plunger's
+    position, straight up the table."""
+
+    speed: tuple[float, float]  # launch speed range (min, max) [m/s]
+
+
+@dataclass(frozen=True)
+class Trough:
+    """The balls the machine holds (those not in play wait in the trough and are fed to the
+    shooter lane), and the auto-plunger that launches extra balls in a multiball. Not in the
+    kernel yet: today one ball is in play at a time."""
+
+    balls: int = 1  # balls in the machine [-]
+    auto_plunger: AutoPlunger | None = None
+
+
+@dataclass(frozen=True)
 class BallSave:
     """A ball that drains within ``time`` of leaving the plunger is served again, once per
     ball, without losing it."""
@@ -308,6 +364,9 @@ class Ball:
     mass: float
     start: tuple[float, float]
     velocity: tuple[float, float] = (0.0, 0.0)
+    # Of a ball's contact with another ball (needed where the trough holds several); None: a
+    # table of one ball in play has no ball-ball contact [-].
+    material: str | None = None
 
 
 @dataclass(frozen=True)
@@ -348,6 +407,11 @@ class Table:
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
     source: str = "<dict>"  # file the table was read from
+    # Multiball (see ``Saucer``, ``Lock``, ``Trough``): validated data, not packed for the kernel
+    # yet. Last, so that a Table built by position keeps its meaning.
+    saucers: tuple[Saucer, ...] = ()
+    locks: tuple[Lock, ...] = ()
+    trough: Trough | None = None  # None: one ball, as a trough of 1
 
     @cached_property
     def free_space(self) -> np.ndarray:

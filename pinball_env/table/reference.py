@@ -131,6 +131,13 @@ def schema_limits() -> list[str]:
         f"a flipper's swing |up_angle - rest_angle| is in (0, {e.MAX_SWING:g}] deg",
         "a flipper's |base_radius - tip_radius| < length",
         f"a kickback's kick speed is in (0, {e.MAX_KICKBACK_SPEED:g}] m/s",
+        "a saucer's centre and every lock slot (where balls are held) are inside the outline, "
+        "clear of every element by the ball's radius, out of every flipper's swing, and at least "
+        "a ball's diameter from one another and from the plunger's position",
+        "a lock's radius, where absent, is the ball's radius",
+        "a trough of more than one ball needs a plunger and ball.material (the ball-ball "
+        "material, one of the materials); an auto_plunger needs a plunger, its speed is "
+        "[min, max] with min <= max",
         "a plunger's speed and pull_speed are [min, max] with min <= max",
         "a player's plunger has stroke, pull_time and pull_speed together; scatter and "
         "skill_shot need it, and scatter < pull_speed's min",
