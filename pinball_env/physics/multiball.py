@@ -172,6 +172,7 @@ class MultiScratch(NamedTuple):
     events: np.ndarray  # (N, M, EVENT_SIZE) float64: the cached earliest element contacts
     work: np.ndarray  # (N, M, WORK_SIZE) float64: the substep's bookkeeping
     dropped: np.ndarray  # (N, T) bool: drop targets hit in this substep (they drop at its end)
+    passes: np.ndarray  # (N,) int64: the event passes of the env's last frame (for the tests)
 
 
 def make_multi_state(n_envs: int, n_balls: int) -> MultiState:
@@ -195,6 +196,7 @@ def make_multi_scratch(geometry: Geometry, n_envs: int, n_balls: int) -> MultiSc
         events=np.zeros((*shape, EVENT_SIZE)),
         work=np.zeros((*shape, WORK_SIZE)),
         dropped=np.zeros((n_envs, geometry.drop_targets.shape[0]), dtype=np.bool_),
+        passes=np.zeros(n_envs, dtype=np.int64),
     )
 
 
@@ -355,6 +357,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     up = state.targets_up[env]
     state.contact_count[env] = 0
     state.hits[env, :] = 0
+    mscratch.passes[env] = 0
     has_cabinet = geometry.cabinet.shape[0] > 0
     cabinet_dv = scratch.cabinet_dv[env]
     dvx = dvy = 0.0
@@ -396,6 +399,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 moving = 0
                 break
             passes += 1
+            mscratch.passes[env] += 1
             elapsed = h - remaining
             for j in range(n_flippers):
                 angles[j] = flipper_angle_at(angle[j], omegas[j], stops[j], elapsed)
