@@ -180,11 +180,16 @@ velocity = st.floats(-5.0, 5.0)
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
-@given(st.lists(st.tuples(coordinate_x, coordinate_y, velocity, velocity), min_size=2, max_size=4))
-def test_random_balls_in_the_box_never_overlap_escape_or_blow_up(balls):
+@given(
+    st.lists(st.tuples(coordinate_x, coordinate_y, velocity, velocity), min_size=2, max_size=4),
+    st.booleans(),
+)
+def test_random_balls_in_the_box_never_overlap_escape_or_blow_up(balls, first_held):
     points = [(x, y) for x, y, _, _ in balls]
     assume(clear_start(BOX, points))
-    world = world_with(BOX, [((x, y), (vx, vy)) for x, y, vx, vy in balls])
+    held = (0,) if first_held else ()
+    world = world_with(BOX, [((x, y), (vx, vy)) for x, y, vx, vy in balls], held=held)
+    start = state(world)
     m = len(balls)
     cap = BOX.simulation.substeps * BOX.simulation.max_passes * m
     for _ in range(600):
@@ -196,6 +201,8 @@ def test_random_balls_in_the_box_never_overlap_escape_or_blow_up(balls):
         assert min_distance(b, np.ones(m, bool)) >= 2 * R - SKIN - 1e-9
         assert (b[:, BALL_X] >= LEFT + R - SKIN).all() and (b[:, BALL_X] <= RIGHT - R + SKIN).all()
         assert (b[:, BALL_Y] >= FLOOR + R - SKIN).all() and (b[:, BALL_Y] <= TOP - R + SKIN).all()
+        if first_held:  # a held ball does not move
+            assert (b[0] == start[0]).all()
 
 
 def test_balls_resting_in_a_corner_stay_still_for_a_minute():
