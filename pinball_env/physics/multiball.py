@@ -96,7 +96,6 @@ from pinball_env.physics.near import (
 )
 from pinball_env.physics.step import (
     FLIPPER_CONTACT_TOLERANCE,
-    MAX_NUDGE,
     MAX_STALLED_PASSES,
     MIN_PROGRESS,
     SETTLE_ROUNDS,
@@ -218,12 +217,12 @@ def ball_overlap(x, y, i, balls, active, r):
 @njit(cache=True)
 def settle_balls(x, y, i, balls, active, geometry, angles, up, r, skin):
     """``step.settle`` with the other balls in play as fixed circles of radius 2r: push ball
-    ``i`` at (x, y) out of every element (``settle``'s rounds) and every ball it overlaps by
-    more than half the skin, to 2r + skin from its centre, in rounds (projected Gauss-Seidel)
-    until it overlaps none or SETTLE_ROUNDS have passed. A move of more than MAX_NUDGE radii
-    (no room near here) is not made: the ball stays where it was (the caller undoes the
-    substep)."""
-    x0, y0 = x, y
+    ``i`` at (x, y) out of every element (``settle``'s rounds, each move at most MAX_NUDGE
+    radii: no room near here leaves it where it was) and out of every ball it overlaps by more
+    than half the skin, to 2r + skin from its centre, in rounds (projected Gauss-Seidel) until
+    it overlaps none or SETTLE_ROUNDS have passed. A push off a ball is swept against the walls
+    and posts and stops a skin short of them (so it may be long: balls placed into one another
+    are pushed apart whatever the overlap, never through a wall). Returns the new centre."""
     target = 2.0 * r + skin
     for _ in range(SETTLE_ROUNDS):
         x, y = settle(x, y, geometry, angles, up, r, skin)
@@ -233,14 +232,21 @@ def settle_balls(x, y, i, balls, active, geometry, angles, up, r, skin):
                 continue
             gx, gy = x - balls[j, BALL_X], y - balls[j, BALL_Y]
             d = norm(gx, gy)
-            if d < target - 0.5 * skin and d > 0.0:
-                x += gx / d * (target - d)
-                y += gy / d * (target - d)
+            if d >= target - 0.5 * skin:
+                continue
+            nx, ny = (gx / d, gy / d) if d > 0.0 else (0.0, 1.0)  # coincident: up the table
+            push = target - d
+            t, _, _, _ = earliest_static_contact(
+                x, y, nx * push, ny * push, r + skin, geometry.segments, geometry.segment_bounds,
+                geometry.segment_one_sided, geometry.circles,
+            )  # fmt: skip
+            push *= min(t, 1.0)
+            if push > 0.0:
+                x += nx * push
+                y += ny * push
                 moved = True
         if not moved:
             break
-    if norm(x - x0, y - y0) > MAX_NUDGE * r:
-        return x0, y0
     return x, y
 
 
@@ -326,6 +332,24 @@ def wedge(ball, w, remaining, h, geometry, angle, omegas, stops, targets, angles
         ball[BALL_VX] = ball[BALL_VY] = ball[BALL_SPIN] = 0.0
 
 
+@njit(cache=True)
+def separate(ball, nx, ny, push, r, skin, geometry):
+    """Move ``ball`` (a row of ``MultiState.balls``) by ``push`` along n, away from the ball
+    it touched. A push of up to a skin is made as it is (the ball, at least r off every
+    surface, stays out of them); a longer one (balls that overlapped deeply, or a ball pushed
+    off a fixed one) is swept against the walls and posts, as a swinging flipper's push is in
+    ``step_ball``, and stops a skin short of the first it would touch."""
+    if push > skin:
+        t, _, _, _ = earliest_static_contact(
+            ball[BALL_X], ball[BALL_Y], nx * push, ny * push, r + skin, geometry.segments,
+            geometry.segment_bounds, geometry.segment_one_sided, geometry.circles,
+        )  # fmt: skip
+        push *= min(t, 1.0)
+    ball[BALL_X] += nx * push
+    ball[BALL_Y] += ny * push
+    return push
+
+
 # --- the step --------------------------------------------------------------------------------
 
 
@@ -387,6 +411,9 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 moving += 1
                 balls[i, BALL_VX] += settings.gravity_x * h - dvx
                 balls[i, BALL_VY] += settings.gravity_y * h - dvy
+                # A ball that starts the substep in another (placed there) is settled at its end.
+                if ball_overlap(balls[i, BALL_X], balls[i, BALL_Y], i, balls, active, r) > skin:
+                    w[W_CHECK] = 1.0
         remaining = h
         cap = settings.max_passes * moving
         passes = 0
@@ -582,10 +609,8 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 push = reach2 + skin - d
                 if push > 0.0:
                     share_a = 0.0 if a_fixed else (1.0 if b_fixed else 0.5)
-                    a[BALL_X] += nx * push * share_a
-                    a[BALL_Y] += ny * push * share_a
-                    b[BALL_X] -= nx * push * (1.0 - share_a)
-                    b[BALL_Y] -= ny * push * (1.0 - share_a)
+                    separate(a, nx, ny, push * share_a, r, skin, geometry)
+                    separate(b, -nx, -ny, push * (1.0 - share_a), r, skin, geometry)
                 events[i, EV_VALID] = events[j, EV_VALID] = 0.0
                 work[i, W_CHECK] = work[j, W_CHECK] = 1.0
                 involved_a, involved_b = (-1 if a_fixed else i), (-1 if b_fixed else j)

@@ -246,3 +246,18 @@ def test_two_balls_cradled_on_a_raised_flipper_rest_together():
         assert min_distance(b, np.ones(2, bool)) >= 2 * R - SKIN - 1e-9
     speeds = np.hypot(b[:, BALL_VX], b[:, BALL_VY])
     assert speeds.max() < 1e-2, (b, speeds)
+
+
+def test_balls_placed_into_one_another_are_pushed_apart_and_stay_in_the_box():
+    # Overlapping by half a radius, at rest: settled apart at the first substep's end.
+    world = world_with(LEVEL, [((0.25, 0.5), (0, 0)), ((0.25 + 1.5 * R, 0.5), (0, 0))])
+    step_multiball(world)
+    assert min_distance(state(world), np.ones(2, bool)) >= 2 * R - SKIN
+    # Deeply, one against a wall and closing in: the push off the other stops short of the wall.
+    x = LEFT + R + 1e-4
+    world = world_with(LEVEL, [((x, 0.5), (0, 0)), ((x + 0.2 * R, 0.5), (-1.0, 0))])
+    for _ in range(30):
+        step_multiball(world)
+        b = state(world)
+        assert (b[:, BALL_X] >= LEFT + R - SKIN).all()
+    assert min_distance(b, np.ones(2, bool)) >= 2 * R - SKIN
