@@ -44,11 +44,16 @@ checked: one left deeper than the skin in an element or another ball is settled 
 (:func:`settle_balls`), and where there is no room it is put back where it started the substep
 (if that is clear of the other balls), at rest, and the flippers within its reach stop.
 
-Left out for now (TODO, before the games use it): spinners and kickback lines (``step_ball``'s
-``cross_target_lines``) are not crossed; the sensors other than the drain are counted, but the
-contacts with other balls are not logged (they have no element id); a drop target hit drops at
-the end of the substep, and a bank rises only when no ball in play is within a radius of it.
-Hits are counted when they happen (``step_ball`` drops those of a pinched substep).
+Sensors, spinners and dark kickbacks are crossed on each ball's moves (:func:`cross_lines`); a
+lit kickback's line is an event of the ball that crosses it (it fires: the ball leaves at the
+kick). A drop target hit drops at the end of the substep; a bank rises only when no ball in
+play is within a radius of it (:func:`raise_banks_multi`).
+
+Differences from ``step_ball`` and what is left (TODO, before the games use it): contacts
+between balls are not logged in ``State.contacts`` nor counted in ``State.hits`` (they have no
+element id); hits are counted when they happen (``step_ball`` drops those of a pinched
+substep); a wedged ball stops the flippers near it at once, where ``step_ball`` holds them for
+the rest of the substep (the same, with one ball).
 """
 
 import math
@@ -68,6 +73,8 @@ from pinball_env.physics.columns import (
     BALL_X,
     BALL_Y,
     FLIPPER_REST_ANGLE,
+    KICKBACK_VX,
+    KICKBACK_VY,
     PROP_FRICTION,
     PROP_KICK,
     PROP_RESTITUTION,
@@ -80,6 +87,7 @@ from pinball_env.physics.data import (
     State,
     first_drop_target,
     first_flipper,
+    first_kickback,
     log_contact,
     make_scratch,
     make_state,
@@ -116,8 +124,11 @@ from pinball_env.physics.step import (
 )
 from pinball_env.physics.sweep import INF, norm, point_segment_distance
 from pinball_env.physics.targets import (
+    count_kickbacks,
+    kickback_crossing,
     record_crossings,
     sensor_crossing,
+    spin_spinner,
     sweep_drop_targets,
     turn_spinner,
 )
@@ -350,6 +361,24 @@ def separate(ball, nx, ny, push, r, skin, geometry):
     return push
 
 
+@njit(cache=True)
+def cross_lines(state, env, geometry, x, y, vx, vy, dt, start):
+    """The spinner and kickback lines of env ``env`` that a ball moving from (x, y) at
+    (vx, vy) for ``dt`` seconds, from ``start`` [s into the frame], crosses: each spinner it
+    crosses is spun (``targets.spin_spinner``), each dark kickback crossed against its kick is
+    a hit (``targets.count_kickbacks``). (A lit one is an event of the ball: the move ends on
+    its line, see :func:`step_balls`.)"""
+    kickbacks, lit = geometry.kickbacks, state.kickback_lit[env]
+    if kickbacks.shape[0] > 0:
+        count_kickbacks(state, env, x, y, vx, vy, dt, kickbacks, lit, first_kickback(geometry),
+                        start + dt)  # fmt: skip
+    spinners = geometry.spinners
+    for j in range(spinners.shape[0]):
+        u = sensor_crossing(x, y, vx * dt, vy * dt, spinners[j])
+        if u < INF:
+            spin_spinner(spinners[j], state.spinners[env, j], vx, vy, start + dt * u)
+
+
 # --- the step --------------------------------------------------------------------------------
 
 
@@ -390,6 +419,9 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     kick_scale = 0.0 if state.tilted[env] else 1.0
     n_targets = geometry.drop_targets.shape[0]
     target_id = first_drop_target(geometry)
+    n_kickbacks = geometry.kickbacks.shape[0]
+    n_lines = geometry.spinners.shape[0] + n_kickbacks
+    kickback_id = first_kickback(geometry)
     pair_restitution, pair_friction = pair[PROP_RESTITUTION], pair[PROP_FRICTION]
     for k in range(settings.substeps):
         for j in range(n_flippers):
@@ -470,8 +502,16 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                             nx, ny, svx, svy, element, cut, nr, ne[NEAR_FLIPPERS],
                             ne[NEAR_DROP_TARGETS],
                         )  # fmt: skip
+                    used = remaining * min(t, 1.0)
+                    if n_kickbacks > 0:  # a lit kickback's line on the way: it fires there
+                        kicked, u = kickback_crossing(
+                            x, y, vx, vy, used, geometry.kickbacks, state.kickback_lit[env]
+                        )
+                        if kicked >= 0:
+                            used *= u
+                            element, cut = kickback_id + kicked, False
                     ev[EV_VALID] = 1.0
-                    ev[EV_USED] = remaining * min(t, 1.0)
+                    ev[EV_USED] = used
                     ev[EV_REMAINING] = remaining
                     ev[EV_NX], ev[EV_NY], ev[EV_SVX], ev[EV_SVY] = nx, ny, svx, svy
                     ev[EV_ELEMENT] = element
@@ -514,6 +554,8 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                     balls[i, BALL_VY],
                 )
                 nr, ne = near[i], near_ends[i]
+                if n_lines > 0:
+                    cross_lines(state, env, geometry, x, y, vx, vy, dt, k * h + elapsed)
                 crossed = False
                 for s in range(ne[NEAR_DROP_TARGETS], ne[NEAR_SENSORS]):
                     if sensor_crossing(x, y, vx * dt, vy * dt, sensors[nr[s]]) < INF:
@@ -543,6 +585,17 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 ev, w, ball = events[i], work[i], balls[i]
                 ev[EV_VALID] = 0.0
                 element = int(ev[EV_ELEMENT])
+                if element >= kickback_id:  # a kickback fires, if still lit: the ball's kick
+                    lit = state.kickback_lit[env]
+                    if lit[element - kickback_id]:
+                        kick = geometry.kickbacks[element - kickback_id]
+                        ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = (
+                            kick[KICKBACK_VX], kick[KICKBACK_VY], 0.0
+                        )  # fmt: skip
+                        state.hits[env, element] += 1
+                        log_contact(state, env, element, k * h + h - remaining, 0.0)
+                        lit[element - kickback_id] = False
+                    continue
                 if ev[EV_CUT] == 1.0:  # a cut drops the rest of its substep, as a wedge does
                     wedge(ball, w, remaining, h, geometry, angle, omegas, stops, targets, angles,
                           r, skin, True)  # fmt: skip
