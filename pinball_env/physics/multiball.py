@@ -213,7 +213,7 @@ def make_multi_scratch(geometry: Geometry, n_envs: int, n_balls: int) -> MultiSc
 # --- overlaps with the other balls -----------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def ball_overlap(x, y, i, balls, active, r):
     """How deep a ball of radius ``r`` at (x, y) lies in the ball in play it overlaps most,
     ball ``i`` (itself) left out [m]; 0 or less when it overlaps none. The other ball counts as

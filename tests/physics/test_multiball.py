@@ -287,3 +287,28 @@ def test_balls_placed_into_one_another_are_pushed_apart_and_stay_in_the_box():
         b = state(world)
         assert (b[:, BALL_X] >= LEFT + R - SKIN).all()
     assert min_distance(b, np.ones(2, bool)) >= 2 * R - SKIN
+
+
+def test_a_lit_kickback_fires_the_first_ball_and_lets_the_second_through():
+    # The level box with a lit kickback across it at y = 0.5, kicking up the table; two balls
+    # come down side by side, the left one 10 mm ahead.
+    data = yaml.safe_load((builtin_tables_dir() / "box.yaml").read_text(encoding="utf-8"))
+    data["slope_deg"] = 0.0
+    data["walls"] = data["walls"][:1]  # the outline only
+    data["posts"] = []
+    across = [[0.011, 0.5], [0.499, 0.5]]
+    data["kickbacks"] = [{"name": "kick", "points": across, "kick": [0.0, 2.0], "lit": True}]
+    table = table_from_dict(data, "<kickback box>")
+    world = make_multiball(table, 1, 2)
+    world.state.kickback_lit[0] = True
+    place(world, 0, 0, (0.15, 0.52), (0.0, -1.0))
+    place(world, 0, 1, (0.35, 0.53), (0.0, -1.0))
+    kickback = table.element_names.index("kick")
+    hits = 0
+    for _ in range(3):
+        step_multiball(world)
+        hits += world.state.hits[0, kickback]
+    a, b = state(world)
+    assert a[BALL_VY] == 2.0 and a[BALL_Y] > 0.5  # fired back up
+    assert b[BALL_VY] == -1.0 and b[BALL_Y] < 0.5  # the kickback was dark: through
+    assert not world.state.kickback_lit[0, 0] and hits == 2
