@@ -206,9 +206,18 @@ def test_random_balls_in_the_box_never_overlap_escape_or_blow_up(balls, first_he
             assert (b[0] == start[0]).all()
 
 
-def test_balls_resting_in_a_corner_stay_still_for_a_minute():
+@pytest.mark.parametrize("held", [(), (0,)])
+def test_balls_resting_in_a_corner_stay_still_for_a_minute(held):
+    # Held: the first, in the corner, is a locked ball that the others queue against.
+    corner = (LEFT + R + SKIN, FLOOR + R + SKIN)
     world = world_with(
-        BOX, [((0.05, 0.10), (0, 0)), ((0.10, 0.12), (0, 0)), ((0.06, 0.16), (0, 0))]
+        BOX,
+        [
+            (corner if held else (0.05, 0.10), (0, 0)),
+            ((0.10, 0.12), (0, 0)),
+            ((0.06, 0.16), (0, 0)),
+        ],
+        held=held,
     )
     # Gravity into the bottom left corner: the balls heap up there.
     world.settings = world.settings._replace(gravity_x=-0.6)
