@@ -614,7 +614,8 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                     angles[j] = flipper_angle_at(angle[j], omegas[j], stops[j], h - remaining)
                 x, y = ball[BALL_X], ball[BALL_Y]
                 push = r + skin - surface_distance(x, y, element, geometry, angles)
-                if element >= flipper_id and push > 0.0 and svx * nx + svy * ny > 0.0:
+                on_flipper = flipper_id <= element < flipper_id + n_flippers  # not a target
+                if on_flipper and push > 0.0 and svx * nx + svy * ny > 0.0:
                     t_push, _, _, _ = earliest_static_contact(
                         x, y, nx * push, ny * push, r + skin, segments, bounds, one_sided,
                         circles,
@@ -633,9 +634,9 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                     state.hits[env, element] += 1
                     if target_id <= element < target_id + n_targets:
                         dropped[element - target_id] = True
-                if element >= flipper_id and svx * nx + svy * ny > 0.0:
+                if on_flipper and svx * nx + svy * ny > 0.0:
                     w[W_PUSHERS] = int(w[W_PUSHERS]) | (1 << (element - flipper_id))
-                if element >= flipper_id and omegas[element - flipper_id] != 0.0:
+                if on_flipper and omegas[element - flipper_id] != 0.0:
                     w[W_CHECK] = 1.0
                 involved_a, involved_b = i, -1
             else:

@@ -4,6 +4,10 @@ beyond the skin, no escape, finite state, bounded passes), balls at rest togethe
 ``step_ball`` has it, and two balls cradled on a raised flipper."""
 
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -321,3 +325,39 @@ def test_a_lit_kickback_fires_the_first_ball_and_lets_the_second_through():
     assert a[BALL_VY] == 2.0 and a[BALL_Y] > 0.5  # fired back up
     assert b[BALL_VY] == -1.0 and b[BALL_Y] < 0.5  # the kickback was dark: through
     assert not world.state.kickback_lit[0, 0] and hits == 2
+
+
+TRACE_SCRIPT = """
+import sys
+import numpy as np
+from pinball_env.table import load_table
+from pinball_env.physics.multiball import make_multiball, place, step_multiball
+world = make_multiball(load_table("classic_v1"), 2, 3, pair=(0.9, 0.1))
+place(world, 0, 0, (0.1, 0.95), (4.0, -2.5))
+place(world, 0, 1, (0.3, 0.6), (-3.0, 1.0))
+place(world, 0, 2, (0.2, 0.4), (0.5, 2.0))
+place(world, 1, 0, (0.15, 0.3))
+place(world, 1, 1, (0.18, 0.33))
+place(world, 1, 2, (0.35, 0.5), (-20.0, 31.0))
+rng = np.random.default_rng(1)
+for frame in range(240):
+    if frame % 9 == 0:
+        world.state.flipper_command[:] = rng.random(world.state.flipper_command.shape) < 0.5
+    step_multiball(world)
+np.save(sys.argv[1], np.concatenate([world.multi.balls.ravel(), world.multi.active.ravel(),
+                                     world.state.flipper_angle.ravel()]))
+"""
+
+
+def test_pure_python_multiball_step_is_bitwise_the_compiled_one(tmp_path):
+    root = Path(__file__).resolve().parents[2]
+    traces = []
+    for jit, name in (("0", "compiled.npy"), ("1", "pure.npy")):
+        env = {**os.environ, "NUMBA_DISABLE_JIT": jit, "PYTHONPATH": str(root)}
+        result = subprocess.run(
+            [sys.executable, "-c", TRACE_SCRIPT, str(tmp_path / name)],
+            cwd=root, env=env, capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+        assert result.returncode == 0, result.stderr[-3000:]
+        traces.append(np.load(tmp_path / name))
+    assert (traces[0] == traces[1]).all()
