@@ -29,7 +29,8 @@ crossing takes a ball out of play there); only the ball(s) of the event respond,
 ``step_ball`` does for an element, with ``balls.respond_ball_ball`` for a pair (the pair's
 restitution, zero below ``resting_speed``; its friction), and are separated: a skin off the
 element, or to 2r + skin apart, half each (all on the free one where the other is fixed; a
-push longer than a skin, off a deep overlap, is swept against the walls and posts: :func:`separate`).
+push longer than a skin, off a deep overlap, is swept against the walls and posts:
+:func:`separate`).
 A ball's element contact stays valid while the ball keeps its path (it is cached, and found
 anew only for a ball that responded, or when a flipper was stopped), so a pass costs one
 element sweep per responding ball and one cheap pair test per pair.
@@ -41,9 +42,10 @@ row is wedged and stops alone (the others go on; it is a fixed circle to them). 
 ball is unwedged from its last two elements, the flippers that could reach it are stopped
 where they are, and a ball pinched by a pushing flipper is put at rest (``step.release_wedge``).
 At the substep's end every ball that was wedged, touched a turning flipper or another ball, or
-started the substep inside another, is checked: one left deeper than the skin in an element or another ball is settled out
-(:func:`settle_balls`), and where there is no room it is put back where it started the substep
-(if that is clear of the other balls), at rest, and the flippers within its reach stop.
+started the substep inside another, is checked: one left deeper than the skin in an element or
+another ball is settled out (:func:`settle_balls`), and where there is no room it is put back
+where it started the substep (if that is clear of the other balls), at rest, and the flippers
+within its reach stop.
 
 Sensors, spinners and dark kickbacks are crossed on each ball's moves (:func:`cross_lines`); a
 lit kickback's line is an event of the ball that crosses it (it fires: the ball leaves at the
