@@ -11,8 +11,10 @@ the kernel's order (segments, circles, flippers, sensors): :attr:`Table.element_
 :attr:`Table.element_scores` are indexed by them.
 
 The multiball elements (:class:`Saucer`, :class:`Lock`, :class:`Trough`, and the ball-ball
-``Ball.material``) are validated data that the kernel does not take yet: :meth:`Table.pack` and
-the element ids leave them out.
+``Ball.material``) are not in :meth:`Table.pack`: ``sim.World`` plays them (the trough's number
+of balls, saucers and locks capture balls at the end of a frame), with the ball-ball material
+packed by :meth:`Table.pack_ball_pair`. Saucers, then locks, have element ids after every
+packed element (after the kickbacks), so no id of a table without them moves.
 """
 
 from __future__ import annotations
@@ -221,7 +223,8 @@ class Kickback(_Line):
 class Saucer:
     """A kickout hole: a ball whose centre comes within ``radius`` of ``center`` slower than
     ``capture_speed`` is captured (held at ``center``, immovable), scores, and after
-    ``hold_time`` leaves at ``kick``. Not in the kernel yet (:meth:`Table.pack` leaves it out)."""
+    ``hold_time`` leaves at ``kick``. Played by ``sim.World`` (an element id after the
+    kickbacks; :meth:`Table.pack` leaves it out)."""
 
     name: str
     center: tuple[float, float]  # where a captured ball rests [m]
@@ -236,8 +239,8 @@ class Saucer:
 class Lock:
     """A ball lock: a ball whose centre comes within ``radius`` of the next free slot slower
     than ``capture_speed`` is held there (immovable) until a rule releases the lock's balls,
-    which leave their slots at ``kick``. Not in the kernel yet (:meth:`Table.pack` leaves it
-    out)."""
+    which leave their slots at ``kick``. Played by ``sim.World`` (an element id after the
+    saucers; :meth:`Table.pack` leaves it out)."""
 
     name: str
     slots: tuple[tuple[float, float], ...]  # where held balls rest, in fill order [m]
@@ -262,8 +265,8 @@ class AutoPlunger:
 @dataclass(frozen=True)
 class Trough:
     """The balls the machine holds (those not in play wait in the trough and are fed to the
-    shooter lane), and the auto-plunger that launches extra balls in a multiball. Not in the
-    kernel yet: today one ball is in play at a time."""
+    shooter lane), and the auto-plunger that launches extra balls in a multiball. ``sim.World``
+    holds ``balls`` ball slots per env; the game layer does not serve them yet."""
 
     balls: int = 1  # balls in the machine [-]
     auto_plunger: AutoPlunger | None = None
@@ -407,8 +410,8 @@ class Table:
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
     source: str = "<dict>"  # file the table was read from
-    # Multiball (see ``Saucer``, ``Lock``, ``Trough``): validated data, not packed for the kernel
-    # yet. Last, so that a Table built by position keeps its meaning.
+    # Multiball (see ``Saucer``, ``Lock``, ``Trough``): played by ``sim.World``, not packed in
+    # ``pack``. Last, so that a Table built by position keeps its meaning.
     saucers: tuple[Saucer, ...] = ()
     locks: tuple[Lock, ...] = ()
     trough: Trough | None = None  # None: one ball, as a trough of 1
@@ -471,7 +474,8 @@ class Table:
     @cached_property
     def element_names(self) -> tuple[str, ...]:
         """Name of every element by global id: segments (``"wall[i]"``, then the stand-up
-        targets), circles, flippers, sensors, drop targets, spinners and kickbacks."""
+        targets), circles, flippers, sensors, drop targets, spinners and kickbacks, then the
+        saucers and locks (not packed: ``sim.World`` counts their captures)."""
         segments = [f"{wall.name}[{i}]" for wall in self.walls for i in range(len(wall.segments()))]
         return (*segments, *(e.name for e in self._named_elements))
 
@@ -487,7 +491,7 @@ class Table:
         """The elements after the walls' segments, in id order."""
         return (
             *self.standup_targets, *self.posts, *self.flippers, *self.sensors,
-            *self.drop_target_list, *self.spinners, *self.kickbacks,
+            *self.drop_target_list, *self.spinners, *self.kickbacks, *self.saucers, *self.locks,
         )  # fmt: skip
 
     @property
@@ -587,6 +591,23 @@ class Table:
             skin=sim.skin,
             resting_speed=sim.resting_speed,
         )
+
+    @property
+    def n_balls(self) -> int:
+        """Ball slots per env: the trough's balls, 1 without a trough."""
+        return 1 if self.trough is None else self.trough.balls
+
+    def pack_ball_pair(self) -> np.ndarray:
+        """The ball-ball material as a surface properties row (columns ``PROP_*``; the kick
+        unused): ``ball.material``'s restitution and friction, 1 and 0 where it names none
+        (a table of one ball has no ball-ball contact). Writable, a fresh copy."""
+        row = np.zeros(columns.PROP_SIZE)
+        row[columns.PROP_RESTITUTION] = 1.0
+        if self.ball.material is not None:
+            material = self.material(self.ball.material)
+            row[columns.PROP_RESTITUTION] = material.restitution
+            row[columns.PROP_FRICTION] = material.friction
+        return row
 
     def _props(self, material: str, kick: float) -> list[float]:
         """A surface properties row (columns ``PROP_*``)."""

@@ -120,16 +120,22 @@ def test_the_round_trip_keeps_them(tmp_path: Path) -> None:
     )
 
 
-def test_they_are_not_packed_for_the_kernel_yet() -> None:
-    """The kernel's arrays and settings are classic_v1's: the multiball data waits for it."""
+def test_they_are_not_packed_for_the_kernel() -> None:
+    """The kernel's arrays and settings are classic_v1's (``sim.World`` plays the multiball
+    data); the saucers and locks have element ids after all of classic_v1's."""
     table, classic = load(multiball_dict()), load_table("classic_v1")
     packed, expected = table.pack(), classic.pack()
     assert packed._fields == expected._fields
     for name in expected._fields:
         np.testing.assert_array_equal(getattr(packed, name), getattr(expected, name), err_msg=name)
     assert table.pack_settings() == classic.pack_settings()
-    assert table.element_names == classic.element_names
-    np.testing.assert_array_equal(table.element_scores, classic.element_scores)
+    n = len(classic.element_names)
+    assert table.element_names == (*classic.element_names, "right_saucer", "left_lock")
+    np.testing.assert_array_equal(table.element_scores[:n], classic.element_scores)
+    assert table.element_scores[n:].tolist() == [500, 1000]
+    assert table.n_balls == 3 and classic.n_balls == 1
+    assert table.pack_ball_pair()[:2].tolist() == [0.95, 0.1]
+    assert classic.pack_ball_pair()[:2].tolist() == [1.0, 0.0]
 
 
 # Digests of the built-in tables' descriptions (table_to_dict, as JSON in its key order), taken
