@@ -1,5 +1,6 @@
 """Several balls in one env (multiball, issue 49): the frame step by swept collision with
-ball-ball contact, a kernel path of its own that the games do not use yet.
+ball-ball contact, a kernel path of its own: ``sim.World`` steps a table of several balls (or
+with saucers or locks) with it; the game layer does not serve several balls yet.
 
 What it holds:
 
@@ -11,7 +12,8 @@ What it holds:
 - :func:`ball_overlap`, :func:`settle_balls`: the overlap and settle of ``step.deepest_overlap``
   and ``step.settle`` with the other balls counted (as circles of radius 2r at their centres);
 - ``MultiWorld``, :func:`make_multiball`, :func:`place`, :func:`step_multiball`: a Python
-  helper to build and step a multi-ball world (for tests, until ``sim.World`` takes it).
+  helper to build and step a multi-ball world (for the kernel's tests; ``sim.World`` holds the
+  same arrays and steps them bitwise the same).
 
 The shared parts of the env (flippers, cabinet, drop targets, the contact log and hits) stay in
 ``data.State`` and ``data.Scratch``; ``State.balls`` and ``State.active`` are not used here.

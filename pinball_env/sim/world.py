@@ -111,7 +111,8 @@ class World:
     """
 
     # Whether the physics is the swept kernel's ``step_ball``, which compiled loops over frames
-    # (the game's step) may call directly; a backend that swaps :meth:`_advance` says no.
+    # (the game's step) may call directly; a backend that swaps :meth:`_advance` says no, and so
+    # does a World on the several-ball kernel (several balls, saucers or locks).
     swept_kernel: ClassVar[bool] = True
 
     def __init__(self, table: Table, n_envs: int = 1, num_threads: int = 1) -> None:
@@ -134,6 +135,9 @@ class World:
             self._alias_ball_zero()
             hits = np.zeros((n_envs, len(table.element_scores)), dtype=np.int64)
             self.state = self.state._replace(hits=hits)  # the saucers' and locks' ids too
+            # The game's compiled loop must not call step_ball for it: it hands each frame
+            # to step() (the several-ball kernel, then the saucers and locks).
+            self.swept_kernel = False  # type: ignore[misc]
         # Saucers and locks, by element id (after every packed element); per ball: the element
         # holding it (-1: none), its slot in a lock, how long it has been held [s], and the
         # element it was last released from (not captured by it again until it is out of

@@ -79,15 +79,19 @@ def test_several_balls_step_as_the_multiball_kernel_bitwise():
     with pytest.raises(AttributeError, match="ball_active"):
         world.active  # noqa: B018
     reference = make_multiball(table, 2, 3)
+    threaded = World(table, 2, num_threads=2)  # bitwise the same on any number of threads
     starts = [((0.25, 0.6), (0.5, 1.0)), ((0.3, 0.7), (-0.4, 0.2)), ((0.2, 0.8), (0.0, -1.0))]
     for env in range(2):
         for ball, (position, velocity) in enumerate(starts):
             world.place_ball(env, position, velocity, ball=ball)
+            threaded.place_ball(env, position, velocity, ball=ball)
             place(reference, env, ball, position, velocity)
     rng = np.random.default_rng(3)
     for _ in range(120):
         buttons = rng.random((2, 2)) < 0.3
         world.step(buttons)
+        threaded.step(buttons)
+        np.testing.assert_array_equal(threaded.ball_states, world.ball_states)
         reference.state.flipper_command[:] = buttons[:, table.flipper_buttons]
         step_multiball(reference)
         np.testing.assert_array_equal(world.ball_states, reference.multi.balls)
@@ -191,6 +195,8 @@ def test_a_lock_fills_its_slots_in_order_and_releases_them():
 def test_one_ball_with_a_saucer_aliases_the_one_ball_arrays():
     world = World(level_box(balls=1), 1)
     assert world.n_balls == 1 and world.multi is not None
+    assert not world.swept_kernel  # the game hands its frames to world.step
+    assert World(load_table("classic_v1")).swept_kernel
     assert np.shares_memory(world.state.balls, world.multi.balls)
     world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
     assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
