@@ -159,7 +159,7 @@ class PinballCore:
         game, world = self.game, self.game.world
         table = world.table_of(env)
         renderer = self.frame_renderers(table)
-        ball, angles = tuple(world.balls[env, :2]), world.state.flipper_angle[env]
+        ball, angles = tuple(world.state.balls[env, :2]), world.state.flipper_angle[env]
         targets = targets_view(game, slice(env, env + 1), table)
         rules = {}
         if table.rules is not None:

@@ -41,6 +41,7 @@ from pinball_env.table.rules_schema import (
     EFFECT_NUMBERS,
     MAX_RULES,
     RULE_FIELDS,
+    TRIGGER_FLAGS,
     WHEN_FIELDS,
     known_names,
 )
@@ -92,7 +93,11 @@ _BY_KEYWORDS: dict[Callable[..., Any], Callable[[dict[str, Any]], str]] = {
 # The mappings that the code of the rules parses key by key: their kind (or that of a list of
 # them, where they sit in one) and their defaults.
 _RULE_MAPPINGS: dict[int, tuple[str, Mapping[str, Any]]] = {
-    id(RULE_FIELDS): (f"list of up to {MAX_RULES} rules, each a mapping", {}),
+    id(RULE_FIELDS): (
+        f"list of up to {MAX_RULES} rules, each a mapping (`if_lit`: the name of a light; the "
+        "rule fires only while it is lit)",
+        {"if_lit": None},
+    ),
     id(WHEN_FIELDS): ("mapping of one trigger (see the rule keys), with `at` for a counter", {}),
     id(DO_FIELDS): (
         f"list of 1-{MAX_RULES} effects, each a mapping of one effect (see the rule keys), "
@@ -215,7 +220,9 @@ def _count(keywords: Mapping[str, Any]) -> str:
 
 
 def _meaning(key: str, word: Keyword) -> str:
-    if word.names is None:
+    if word.names is None and key in TRIGGER_FLAGS:
+        takes = "true"
+    elif word.names is None:
         takes = _kind(EFFECT_NUMBERS[key])
     else:
         kind, many = word.names

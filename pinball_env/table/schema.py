@@ -206,7 +206,20 @@ def _sections(
         sections["ball_save"] = TABLE_FIELDS["ball_save"](raw["ball_save"], top.key("ball_save"))
     if "rules" in raw:
         sections["rules"] = parse_rules(raw["rules"], top.key("rules"), point, rule_names(elements))
+        _check_multiball_rules(sections["rules"], sections.get("trough"), top.key("rules"))
     return sections
+
+
+def _check_multiball_rules(rules: Any, trough: Any, loc: Where) -> None:
+    """The multiball effects need the machine's balls: ``add_balls`` and ``ball_save`` a trough
+    of several balls with an auto_plunger."""
+    for i, rule in enumerate(rules.rules):
+        for j, effect in enumerate(rule.do):
+            if effect.kind in ("add_balls", "ball_save") and (
+                trough is None or trough.balls < 2 or trough.auto_plunger is None
+            ):
+                where = loc.key("rules").index(i, rule.name).key("do").index(j).key(effect.kind)
+                where.fail("needs a trough of several balls with an auto_plunger")
 
 
 def _held_places(

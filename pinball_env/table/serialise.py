@@ -80,7 +80,8 @@ def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
         return list(values) if spec[1] else values[0]
 
     def trigger(when: Trigger) -> dict[str, Any]:
-        out = {when.kind: names(TRIGGER_NAMES[when.kind], when.names)}
+        spec = TRIGGER_NAMES[when.kind]
+        out = {when.kind: True if spec is None else names(spec, when.names)}
         return {**out, "at": when.at} if when.kind == "counter" else out
 
     def effect(do: Effect) -> dict[str, Any]:
@@ -99,7 +100,12 @@ def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
         ],
         "max_multiplier": rules.max_multiplier,
         "rules": [
-            {"name": r.name, "when": trigger(r.when), "do": [effect(e) for e in r.do]}
+            {
+                "name": r.name,
+                "when": trigger(r.when),
+                "do": [effect(e) for e in r.do],
+                **({} if r.if_lit is None else {"if_lit": r.if_lit}),
+            }
             for r in rules.rules
         ],
     }
