@@ -4,10 +4,10 @@ every env at once (the single env is a batch of one).
 - :class:`StateObserver`: ball x, y, vx, vy (on a table of several balls a block per ball slot,
   in slot order, with its flag: in play 1, held 0.5, in the trough 0); each flipper's angle
   above rest and angular velocity towards up; ball in play; balls left (in table units, or
-  normalised to the table so that they mean the same on every table); the cabinet's and the rules' rows where the table
-  has them, and optionally ray distances (``physics.rays``). Its :meth:`StateObserver.rows`
-  declare every entry once (:class:`ObservationRow`: meaning, bounds, unit), from which the
-  space's bounds and the documentation's tables are made;
+  normalised to the table so that they mean the same on every table); the cabinet's and the
+  rules' rows where the table has them, and optionally ray distances (``physics.rays``). Its
+  :meth:`StateObserver.rows` declare every entry once (:class:`ObservationRow`: meaning,
+  bounds, unit), from which the space's bounds and the documentation's tables are made;
 - :class:`ImageObserver`: the table drawn as an RGB or grayscale picture.
 """
 
@@ -273,7 +273,7 @@ class ImageObserver:
             return self.renderers(world.table).frames(
                 state.balls, self.game.in_play, state.flipper_angle, grayscale=self.grayscale,
                 threads=world.threads, targets=targets_view(self.game, slice(None)),
-                **self._cabinet(slice(None)),
+                **self._cabinet(slice(None)), **self._other_balls(),
             )  # fmt: skip
         frames = []
         for env in range(world.n_envs):
@@ -286,6 +286,14 @@ class ImageObserver:
                 **self._cabinet(one),
             ))  # fmt: skip
         return np.concatenate(frames)
+
+    def _other_balls(self) -> dict[str, np.ndarray]:
+        """Several balls: every ball on the table (in play or held), drawn besides the game's
+        ball (which waits on the plunger, where it does); nothing for a table of one ball."""
+        if self.game.multi is None:
+            return {}
+        world = self.game.world
+        return {"other_balls": world.ball_states, "other_visible": world.ball_active}
 
     def _cabinet(self, envs: slice) -> dict[str, np.ndarray]:
         """The cabinet as the picture shows it (true scale): the plunger pulled back, a ball
