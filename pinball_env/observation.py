@@ -353,7 +353,7 @@ def balls_observation(game: Game) -> np.ndarray:
     block[..., 1] = balls[..., BALL_Y]
     block[..., 2] = np.clip(balls[..., BALL_VX], -MAX_OBS_SPEED, MAX_OBS_SPEED)
     block[..., 3] = np.clip(balls[..., BALL_VY], -MAX_OBS_SPEED, MAX_OBS_SPEED)
-    block[..., :4] *= (flag > 0.0)[..., None]
+    block[..., :4] = np.where((flag > 0.0)[..., None], block[..., :4], 0.0)  # no -0.0
     block[..., 4] = flag
     return block.reshape(n, 5 * m)
 

@@ -70,8 +70,15 @@ class Game:
             (:meth:`out_of_time`).
         num_threads: threads that share the envs of a frame (the swept kernel).
 
+    A table whose trough holds several balls is played by ``game.multiball`` (:attr:`multi`)
+    around each frame's physics, which the compiled loop then hands back to Python: a ball
+    that drains goes back to the trough, the ball is lost only when the last ball in play
+    drains, locks hold balls out of play, the auto-plunger launches ``add_balls``. The loop
+    plays the game's ball (``world.state.balls``, ``world.state.active``): the first in play.
+
     Attributes:
         world: the physics of every env (and, in ``world.tables``, every env's table).
+        multi: the several balls (``game.multiball.Multiball``), or None for one ball.
         state: the ``GameState`` (``state.world`` is ``world.state``).
         progress: where each env is in the step (``game.play.StepProgress``).
         table: the table the game was made with; its ball and simulation are every env's.

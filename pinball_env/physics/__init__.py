@@ -8,7 +8,8 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 - ``balls.py``: ball-ball contact, the swept test of two moving balls and the impulsive response;
 - ``multiball.py``: several balls per env (``MultiState``), the frame step with ball-ball contact
   in one event loop (``step_balls``, ``step_multiworld``), and a helper to build and step such
-  a world (``make_multiball``); a kernel path of its own, not used by the games yet;
+  a world (``make_multiball``); a kernel path of its own, for tables of several balls (the
+  game's multiball, ``game.multiball``);
 - ``step.py``: the world step over a batch of envs, split into named helpers;
 - ``near.py``: the broad phase, each ball's candidate set of the elements it can reach soon;
 - ``rays.py``: ray casts from the ball against walls, posts and flippers (the observation's rays);

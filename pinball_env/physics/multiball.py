@@ -1,6 +1,7 @@
 """Several balls in one env (multiball, issue 49): the frame step by swept collision with
 ball-ball contact, a kernel path of its own: ``sim.World`` steps a table of several balls (or
-with saucers or locks) with it; the game layer does not serve several balls yet.
+with saucers or locks) with it; the game (``game.multiball``) serves several balls from the
+trough.
 
 What it holds:
 
@@ -54,7 +55,7 @@ lit kickback's line is an event of the ball that crosses it (it fires: the ball 
 kick). A drop target hit drops at the end of the substep; a bank rises only when no ball in
 play is within a radius of it (:func:`raise_banks_multi`).
 
-Differences from ``step_ball`` and what is left (TODO, before the games use it): contacts
+Differences from ``step_ball`` (the games use it as it is; Pinball-v3): contacts
 between balls are not logged in ``State.contacts`` nor counted in ``State.hits`` (they have no
 element id); hits are counted when they happen (``step_ball`` drops those of a pinched
 substep); a wedged ball stops the flippers near it at once, where ``step_ball`` holds them for

@@ -266,7 +266,8 @@ class AutoPlunger:
 class Trough:
     """The balls the machine holds (those not in play wait in the trough and are fed to the
     shooter lane), and the auto-plunger that launches extra balls in a multiball. ``sim.World``
-    holds ``balls`` ball slots per env; the game layer does not serve them yet."""
+    holds ``balls`` ball slots per env; ``game.multiball`` serves them (a ball drains back to
+    the trough; the auto-plunger launches ``add_balls``)."""
 
     balls: int = 1  # balls in the machine [-]
     auto_plunger: AutoPlunger | None = None

@@ -150,7 +150,8 @@ BUILTIN_DIGESTS = {
 
 @pytest.mark.parametrize("name", sorted(BUILTIN_DIGESTS))
 def test_the_builtin_tables_write_as_they_did(name: str) -> None:
-    assert available_tables("all") == sorted(BUILTIN_DIGESTS)
+    # Every built-in table but classic_v3 (Pinball-v3's, the multiball one, newer than the keys).
+    assert available_tables("all") == sorted([*BUILTIN_DIGESTS, "classic_v3"])
     table = load_table(name)
     data = table_to_dict(table)
     assert hashlib.sha256(json.dumps(data).encode()).hexdigest() == BUILTIN_DIGESTS[name]
