@@ -102,7 +102,7 @@ def _balls_infos(game: "Game", envs: int | slice) -> dict[str, Any]:
         return {}
     world, state = game.world, game.state
     states = world.ball_states[envs]
-    locked = world.ball_held & np.isin(world.holder, game.multi.lock_ids)
+    locked = game.multi.locked(slice(None))
     return {
         "ball_positions": states[..., [BALL_X, BALL_Y]],
         "ball_velocities": states[..., [BALL_VX, BALL_VY]],

@@ -62,6 +62,10 @@ class Multiball:
         table = game.table
         self.n_balls = world.n_balls
         self.lock_ids = np.asarray(world.lock_ids, dtype=np.int64)
+        # The locks' element ids run on from one another (World.lock_ids).
+        self._locks = (
+            (int(self.lock_ids[0]), int(self.lock_ids[-1]) + 1) if len(self.lock_ids) else (0, 0)
+        )
         self.plunger = np.asarray(table.plunger.position, dtype=np.float64)
         auto = table.trough.auto_plunger
         self.auto_speed = auto.speed if auto is not None else table.plunger.speed
@@ -74,10 +78,12 @@ class Multiball:
 
     # --- the balls -----------------------------------------------------------------------
 
-    def locked(self, env: int) -> np.ndarray:
-        """(M,) bool: env ``env``'s balls held in a lock."""
+    def locked(self, env: int | slice) -> np.ndarray:
+        """(M,) bool: env ``env``'s balls held in a lock (or (N, M), of ``slice(None)``)."""
         world = self.game.world
-        return world.ball_held[env] & np.isin(world.holder[env], self.lock_ids)
+        first, end = self._locks
+        holder = world.holder[env]
+        return world.ball_held[env] & (holder >= first) & (holder < end)
 
     def playing(self, env: int) -> np.ndarray:
         """(M,) bool: env ``env``'s balls in play (on the table, not held in a lock)."""
