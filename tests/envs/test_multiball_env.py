@@ -134,3 +134,24 @@ def test_the_same_seed_plays_the_same_game_and_a_pickle_goes_on_alike():
     assert play(a) == play(b)
     copy = pickle.loads(pickle.dumps(a))
     assert play(a) == play(copy)
+
+
+def test_the_frame_and_the_picture_show_every_ball():
+    from pinball_env.render.colours import BALL, rgb
+
+    def ball_pixels(picture):
+        return int((picture == np.array(rgb(BALL), dtype=np.uint8)).all(axis=-1).sum())
+
+    env = gym.make("Pinball-v3", render_mode="rgb_array")
+    pictures = gym.make("Pinball-v3", obs_type="rgb", image_size=(214, 102))
+    counts = []
+    for one in (env, pictures):
+        obs, _ = one.reset(seed=0, options=ON_TABLE)
+        first = ball_pixels(one.render() if one is env else obs)
+        more_balls(one, 0)
+        for _ in range(40):
+            obs, *_ = one.step(0)
+        assert one.unwrapped.game.world.ball_active[0].sum() == 3
+        counts.append((first, ball_pixels(one.render() if one is env else obs)))
+    for first, three in counts:
+        assert first > 0 and three >= 2.5 * first
