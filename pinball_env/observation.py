@@ -1,12 +1,13 @@
 """What the agent sees: the observers of a game, each with its space and one ``observe`` for
 every env at once (the single env is a batch of one).
 
-- :class:`StateObserver`: ball x, y, vx, vy; each flipper's angle above rest and angular
-  velocity towards up; ball in play; balls left (in table units, or normalised to the table so
-  that they mean the same on every table); the cabinet's and the rules' rows where the table
-  has them, and optionally ray distances (``physics.rays``). Its :meth:`StateObserver.rows`
-  declare every entry once (:class:`ObservationRow`: meaning, bounds, unit), from which the
-  space's bounds and the documentation's tables are made;
+- :class:`StateObserver`: ball x, y, vx, vy (on a table of several balls a block per ball slot,
+  in slot order, with its flag: in play 1, held 0.5, in the trough 0); each flipper's angle
+  above rest and angular velocity towards up; ball in play; balls left (in table units, or
+  normalised to the table so that they mean the same on every table); the cabinet's and the
+  rules' rows where the table has them, and optionally ray distances (``physics.rays``). Its
+  :meth:`StateObserver.rows` declare every entry once (:class:`ObservationRow`: meaning,
+  bounds, unit), from which the space's bounds and the documentation's tables are made;
 - :class:`ImageObserver`: the table drawn as an RGB or grayscale picture.
 """
 
@@ -92,13 +93,23 @@ class StateObserver:
         norm = self.normalised
         _, _, swing, top_speed = flipper_numbers(table)
         speed = MAX_OBS_SPEED
-        rows = [
-            ("ball x", 0.0, 1.0 if norm else table.width, "table widths" if norm else "m"),
-            ("ball y (up the table)", 0.0, 1.0 if norm else table.height,
-             "table heights" if norm else "m"),
-            (f"ball vx (clipped to +-{speed:g})", -speed, speed, "m/s"),
-            (f"ball vy (clipped to +-{speed:g})", -speed, speed, "m/s"),
-        ]  # fmt: skip
+        # One ball: its block; several (a trough): a block per ball slot, in slot order, each
+        # with its flag (balls_observation).
+        n_balls = table.n_balls
+        rows = []
+        for i in range(n_balls):
+            ball = "ball" if n_balls == 1 else f"ball {i}"
+            rows += [
+                (f"{ball} x", 0.0, 1.0 if norm else table.width, "table widths" if norm else "m"),
+                (f"{ball} y (up the table)", 0.0, 1.0 if norm else table.height,
+                 "table heights" if norm else "m"),
+                (f"{ball} vx (clipped to +-{speed:g})", -speed, speed, "m/s"),
+                (f"{ball} vy (clipped to +-{speed:g})", -speed, speed, "m/s"),
+            ]  # fmt: skip
+            if n_balls > 1:
+                rows.append((f"{ball} in play (1: on the table or the player's plunger), held in "
+                             "a lock or saucer (0.5) or in the trough (0; x, y, vx, vy 0)", 0.0,
+                             1.0, ""))  # fmt: skip
         names = flipper_names(table)
         rows += [(f"{name} angle above rest", 0.0, 1.0 if norm else top,
                   "swings" if norm else "rad")
@@ -174,6 +185,12 @@ class StateObserver:
             obs[:, 1] /= tables.height
             obs[:, 4 : 4 + n] /= tables.flipper_swing
             obs[:, 4 + n : 4 + 2 * n] /= tables.flipper_top_speed
+        if self.game.multi is not None:
+            block = balls_observation(self.game)
+            if self.normalised:
+                block[:, 0::5] /= tables.width
+                block[:, 1::5] /= tables.height
+            obs = np.concatenate([block, obs[:, 4:]], axis=1)
         if self.game.cabinet:
             stroke = self.game.table.plunger.stroke if self.normalised else 1.0
             cabinet = cabinet_observation(
@@ -256,7 +273,7 @@ class ImageObserver:
             return self.renderers(world.table).frames(
                 state.balls, self.game.in_play, state.flipper_angle, grayscale=self.grayscale,
                 threads=world.threads, targets=targets_view(self.game, slice(None)),
-                **self._cabinet(slice(None)),
+                **self._cabinet(slice(None)), **self._other_balls(),
             )  # fmt: skip
         frames = []
         for env in range(world.n_envs):
@@ -269,6 +286,14 @@ class ImageObserver:
                 **self._cabinet(one),
             ))  # fmt: skip
         return np.concatenate(frames)
+
+    def _other_balls(self) -> dict[str, np.ndarray]:
+        """Several balls: every ball on the table (in play or held), drawn besides the game's
+        ball (which waits on the plunger, where it does); nothing for a table of one ball."""
+        if self.game.multi is None:
+            return {}
+        world = self.game.world
+        return {"other_balls": world.ball_states, "other_visible": world.ball_active}
 
     def _cabinet(self, envs: slice) -> dict[str, np.ndarray]:
         """The cabinet as the picture shows it (true scale): the plunger pulled back, a ball
@@ -310,6 +335,27 @@ def make_observer(
     if obs_type == "state":
         return StateObserver(game, normalised, rays)
     return ImageObserver(game, image_size, grayscale=obs_type == "grayscale")
+
+
+def balls_observation(game: Game) -> np.ndarray:
+    """(n_envs, 5 M) float32: every ball slot of a game of several balls, in slot order: x, y,
+    vx, vy (clipped to +-MAX_OBS_SPEED) and its flag: 1 in play (on the table, or waiting on
+    the player's plunger), 0.5 held in a lock or saucer, 0 in the trough (x, y, vx, vy 0)."""
+    world, state = game.world, game.state
+    balls = world.ball_states
+    n, m = balls.shape[:2]
+    flag = np.where(world.ball_active, np.where(world.ball_held, 0.5, 1.0), 0.0)
+    slot = state.ball_slot
+    waiting = np.flatnonzero(state.on_plunger & (slot >= 0))
+    flag[waiting, slot[waiting]] = 1.0
+    block = np.zeros((n, m, 5), dtype=np.float32)
+    block[..., 0] = balls[..., BALL_X]
+    block[..., 1] = balls[..., BALL_Y]
+    block[..., 2] = np.clip(balls[..., BALL_VX], -MAX_OBS_SPEED, MAX_OBS_SPEED)
+    block[..., 3] = np.clip(balls[..., BALL_VY], -MAX_OBS_SPEED, MAX_OBS_SPEED)
+    block[..., :4] = np.where((flag > 0.0)[..., None], block[..., :4], 0.0)  # no -0.0
+    block[..., 4] = flag
+    return block.reshape(n, 5 * m)
 
 
 @njit(cache=True)

@@ -159,13 +159,18 @@ class PinballCore:
         game, world = self.game, self.game.world
         table = world.table_of(env)
         renderer = self.frame_renderers(table)
-        ball, angles = tuple(world.balls[env, :2]), world.state.flipper_angle[env]
+        ball, angles = tuple(world.state.balls[env, :2]), world.state.flipper_angle[env]
         targets = targets_view(game, slice(env, env + 1), table)
-        rules = {}
+        rules: dict[str, Any] = {}
         if table.rules is not None:
             rules = {"bonus": game.state.bonus[env], "multiplier": game.state.multiplier[env]}
+        others: dict[str, Any] = {}
+        if game.multi is not None:  # every ball on the table; the trough's count
+            on_table = world.ball_active[env]
+            others = {"other_balls": world.ball_states[env, on_table, :2]}
+            rules["trough"] = int(game.multi.in_trough(env).sum())
         if not game.cabinet:
-            playfield = renderer.frame(ball, angles, targets=targets)
+            playfield = renderer.frame(ball, angles, targets=targets, **others)
             board = scoreboard(playfield.shape[0], game.score[env], game.balls_left[env],
                                **rules)  # fmt: skip
             return np.concatenate([playfield, board], axis=1)
@@ -177,6 +182,7 @@ class PinballCore:
             on_plunger=info["ball_on_plunger"],
             cabinet_offset=tuple(SHAKE_EXAGGERATION * info["cabinet_offset"]),
             targets=targets,
+            **others,
         )
         board = scoreboard(
             playfield.shape[0],

@@ -2,7 +2,9 @@
 launches, drains, score, reward, infos), its state (``state.py``), the buttons and actions
 (``actions.py``), the infos (``infos.py``), the tables it can be played on (``playable.py``),
 the compiled loop that plays a step's frames (``play.py``) by its step parameters
-(``parameters.py``), and a table's rules compiled (``rulebook.py``)."""
+(``parameters.py``), a table's rules compiled (``rulebook.py``) and the several balls of a
+table whose trough holds more than one (``multiball.py``: the trough, drains, locks, the
+auto-plunger, the multiball's start and end)."""
 
 from pinball_env.game.actions import (
     CABINET_BUTTONS,

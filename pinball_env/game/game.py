@@ -18,6 +18,7 @@ import numpy as np
 
 from pinball_env.game.actions import CABINET_BUTTONS, button_names, decode_actions, discrete_buttons
 from pinball_env.game.infos import batch_infos, element_events, env_info
+from pinball_env.game.multiball import Multiball
 from pinball_env.game.parameters import (
     MAX_RUN_ON_FRAMES,
     StepParameters,
@@ -37,6 +38,7 @@ from pinball_env.game.playable import check_playable, check_same_game
 from pinball_env.game.rulebook import RuleBook, compile_rules
 from pinball_env.game.state import (
     GameState,
+    ball_slots,
     clear_game,
     copy_state,
     copy_state_into,
@@ -68,8 +70,15 @@ class Game:
             (:meth:`out_of_time`).
         num_threads: threads that share the envs of a frame (the swept kernel).
 
+    A table whose trough holds several balls is played by ``game.multiball`` (:attr:`multi`)
+    around each frame's physics, which the compiled loop then hands back to Python: a ball
+    that drains goes back to the trough, the ball is lost only when the last ball in play
+    drains, locks hold balls out of play, the auto-plunger launches ``add_balls``. The loop
+    plays the game's ball (``world.state.balls``, ``world.state.active``): the first in play.
+
     Attributes:
         world: the physics of every env (and, in ``world.tables``, every env's table).
+        multi: the several balls (``game.multiball.Multiball``), or None for one ball.
         state: the ``GameState`` (``state.world`` is ``world.state``).
         progress: where each env is in the step (``game.play.StepProgress``).
         table: the table the game was made with; its ball and simulation are every env's.
@@ -103,7 +112,12 @@ class Game:
         self.rule_set = table.rules
         rule_set = table.rules or RuleSet()
         self.event_names = rule_set.event_names
-        self.state = make_game_state(self.world.state, self.book, rule_set, len(table.flippers))
+        # Several balls (a trough of more than one): game.multiball plays them around the
+        # frames' physics, which the compiled loop hands back (World.swept_kernel is False).
+        self.multi = Multiball(self) if self.world.n_balls > 1 else None
+        slots = ball_slots(self.world) if self.multi is not None else None
+        self.state = make_game_state(self.world.state, self.book, rule_set, len(table.flippers),
+                                     slots, len(table.locks))  # fmt: skip
         # The buttons: the flippers', and the cabinet's on a table that has one.
         self.cabinet = table.has_cabinet
         self.button_names = button_names(self.cabinet)
@@ -161,6 +175,8 @@ class Game:
         """Put every env back to ``snapshot`` (from :meth:`snapshot` of a Game on the same table
         with as many envs)."""
         copy_state_into(snapshot, self.state)
+        if self.multi is not None:
+            self.multi.remember_all()
 
     # --- playing ------------------------------------------------------------------------------
 
@@ -192,13 +208,20 @@ class Game:
             rules = self.rule_set
             lights = [light.lit for light in rules.lights] if rules else []
         clear_game(self.state, env, self.balls_per_game, lights, self.cabinet)
+        if self.multi is not None:
+            self.multi.new_game(env)
         if self.cabinet:
             self.serve(env)
         else:
             self.launch(env, rng)
         if options:
-            self.world.place_ball(env, position, velocity)
             self.state.on_plunger[env] = False
+            if self.multi is not None:
+                self.multi.new_game(env)
+                self.state.ball_slot[env] = 0
+            self.world.place_ball(env, position, velocity)
+            if self.multi is not None:
+                self.multi.sync(env)
             self._moved(env)
 
     def launch(self, env: int, rng: np.random.Generator) -> None:
@@ -222,7 +245,11 @@ class Game:
                 low, high = plunger.speed
                 speeds.append(float(rngs[env].uniform(low, high)))
         envs = np.asarray(envs, dtype=np.intp)
-        self.world.launch_balls(envs, speeds)
+        if self.multi is None:
+            self.world.launch_balls(envs, speeds)
+        else:  # the game's ball where it is in play or on the plunger, else a trough ball
+            for env, speed in zip(envs, speeds, strict=True):
+                self.multi.place(int(env), self.multi.launch_slot(int(env)), (0.0, speed), True)
         plunged = envs[progress.plunge[envs]]
         progress.plunge[envs] = False
         if len(plunged):
@@ -231,14 +258,21 @@ class Game:
         state.save_frames[first] = self.book.save_frames
         state.on_plunger[envs] = False
         state.plunger_pull[envs] = 0.0
+        if self.multi is not None:
+            for env in envs:
+                self.multi.sync(int(env))
         self._moved(envs)
 
     def serve(self, env: int) -> None:
         """Put env ``env``'s ball on the player's plunger, at rest, to wait for the player."""
-        self.world.launch(env, 0.0)
-        self.world.state.active[env] = False
-        self.state.on_plunger[env] = True
         self.state.plunger_pull[env] = 0.0
+        self.state.on_plunger[env] = True
+        if self.multi is not None:
+            self.multi.place(env, self.multi.launch_slot(env), (0.0, 0.0), False)
+            self.multi.sync(env)
+        else:
+            self.world.launch(env, 0.0)
+            self.world.state.active[env] = False
         self._moved(env)
 
     @property
@@ -249,7 +283,7 @@ class Game:
     def _moved(self, envs: int | np.ndarray) -> None:
         """Restart the ball-search clock of env ``envs`` (or of each of them) where its ball is
         now."""
-        self.state.anchor[envs] = self.world.balls[envs][..., [BALL_X, BALL_Y]]
+        self.state.anchor[envs] = self.world.state.balls[envs][..., [BALL_X, BALL_Y]]
         self.state.still_frames[envs] = 0
 
     def buttons(self, actions: Any) -> np.ndarray:
@@ -327,11 +361,14 @@ class Game:
         if play is None:
             loop = play_frames if isinstance(geometries, tuple) else play_frames_per_env
             play = self._play[type(geometries)] = compiled_entry(loop, (*args, 0, 0))
+        multi = self.multi
         while True:
             self.world.threads.run(play, self.n_envs, *args)
             if not progress.finite.all():
                 bad = np.flatnonzero(~progress.finite).tolist()
                 raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
+            if multi is not None:
+                multi.write_back()  # the loop's writes to the game's ball, to its slot
             # Launches first: the player's plunge hands back before its frame's physics.
             launches = np.flatnonzero(progress.launch)
             if len(launches):
@@ -340,7 +377,12 @@ class Game:
             # (Not swept) the backend's frame is due.
             physics = None if swept else progress.stage == PHYSICS
             if physics is not None and physics.any():
+                if multi is not None:
+                    stepped = np.flatnonzero(physics)
+                    multi.before_frame(stepped, rngs)
                 self.world.step(None, physics)
+                if multi is not None:
+                    multi.after_frame(stepped)
                 progress.stage[physics] = AFTER_PHYSICS
                 if self.on_frame is not None:
                     self.on_frame()

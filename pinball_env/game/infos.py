@@ -22,9 +22,10 @@ def element_events(game: "Game", env: int) -> dict[str, int]:
 def batch_infos(game: "Game") -> dict[str, np.ndarray]:
     """The per-step info of every env as arrays (first axis the env): ``ball_position`` [m],
     ``ball_velocity`` [m/s], ``score``, ``balls_left``, ``points`` (this step), ``drained`` (a
-    ball drained this step) and ``frames`` (played in this game); the cabinet's and the rules'
-    entries on tables with them."""
-    state, balls = game.state, game.world.balls
+    ball drained this step) and ``frames`` (played in this game); the cabinet's, the rules' and
+    the several balls' (:func:`_balls_infos`) entries on tables with them. With several balls
+    ``ball_position`` and ``ball_velocity`` are the game's ball's, the first in play."""
+    state, balls = game.state, game.world.state.balls
     return {
         "ball_position": balls[:, [BALL_X, BALL_Y]],
         "ball_velocity": balls[:, [BALL_VX, BALL_VY]],
@@ -35,13 +36,14 @@ def batch_infos(game: "Game") -> dict[str, np.ndarray]:
         "frames": state.frames.copy(),
         **_cabinet_infos(game, slice(None)),
         **_rule_infos(game, slice(None)),
+        **_balls_infos(game, slice(None)),
     }
 
 
 def env_info(game: "Game", env: int) -> dict[str, Any]:
     """The per-step info of env ``env``: that of :func:`batch_infos` as Python numbers (the
     ball's position and velocity as float64 arrays), plus ``events`` (:func:`element_events`)."""
-    state, ball = game.state, game.world.balls[env]
+    state, ball = game.state, game.world.state.balls[env]
     return {
         "ball_position": ball[[BALL_X, BALL_Y]],
         "ball_velocity": ball[[BALL_VX, BALL_VY]],
@@ -56,6 +58,10 @@ def env_info(game: "Game", env: int) -> dict[str, Any]:
             for key, value in _cabinet_infos(game, env).items()
         },
         **_rule_info(game, env),
+        **{
+            key: value if isinstance(value, np.ndarray) else value.item()
+            for key, value in _balls_infos(game, env).items()
+        },
     }
 
 
@@ -85,6 +91,26 @@ def _rule_info(game: "Game", env: int) -> dict[str, Any]:
             name: int(n) for name, n in zip(game.event_names, counts, strict=False) if n
         }
     return info
+
+
+def _balls_infos(game: "Game", envs: int | slice) -> dict[str, Any]:
+    """The several balls' entries (none for a table of one ball): ``ball_positions`` (M, 2)
+    [m] and ``ball_velocities`` (M, 2) [m/s] of every ball slot, ``balls_in_play`` (M,) bool
+    (on the table and not held in a lock), ``balls_locked`` (held in locks), ``multiball`` (two
+    or more balls in play) and ``multiballs`` (started in this game)."""
+    if game.multi is None:
+        return {}
+    world, state = game.world, game.state
+    states = world.ball_states[envs]
+    locked = game.multi.locked(slice(None))
+    return {
+        "ball_positions": states[..., [BALL_X, BALL_Y]],
+        "ball_velocities": states[..., [BALL_VX, BALL_VY]],
+        "balls_in_play": (world.ball_active & ~locked)[envs],
+        "balls_locked": locked[envs].sum(axis=-1),
+        "multiball": state.multiball[envs].copy(),
+        "multiballs": state.multiballs[envs].copy(),
+    }
 
 
 def _cabinet_infos(game: "Game", envs: int | slice) -> dict[str, Any]:

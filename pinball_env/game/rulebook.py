@@ -3,7 +3,10 @@ arrays, :func:`run_rules` plays them for one env after a frame's physics, and
 :func:`end_of_ball` scores the bonus when a ball is lost.
 
 The rules' per-env state (lights, counters, timers, bonus, multiplier, the ball save) is in the
-game's ``GameState``; the targets' (up or down, lit or dark) is the kernel's ``State``.
+game's ``GameState``; the multiball's effects (``release_lock``, ``add_balls``, ``ball_save``)
+are requests there that ``game.multiball`` carries out, and its triggers (``multiball_starts``,
+``multiball_ends``) are ``GameState.multiball_events``, set by it after each frame's physics;
+the targets' (up or down, lit or dark) is the kernel's ``State``.
 """
 
 from typing import NamedTuple
@@ -15,10 +18,12 @@ from pinball_env.table import Table
 from pinball_env.table.rules import EFFECTS, TRIGGERS
 
 # Trigger and effect kinds as the compiled code numbers them (indices of the tuples).
-HIT, BANK, FLIPPER, TIMER_ENDS, LIGHTS_ON, COUNTER = (TRIGGERS.index(k) for k in (
-    "hit", "bank", "flipper", "timer_ends", "lights_on", "counter"))  # fmt: skip
+(HIT, BANK, FLIPPER, TIMER_ENDS, LIGHTS_ON, COUNTER, LOCKED, MULTIBALL_STARTS,
+ MULTIBALL_ENDS) = (TRIGGERS.index(k) for k in (
+    "hit", "bank", "flipper", "timer_ends", "lights_on", "counter", "locked", "multiball_starts",
+    "multiball_ends"))  # fmt: skip
 (LIGHT, UNLIGHT, ROTATE, COUNT, START_TIMER, SCORE, BONUS, MULTIPLIER, LIGHT_KICKBACK,
- EXTRA_BALL) = range(len(EFFECTS))  # fmt: skip
+ EXTRA_BALL, RELEASE_LOCK, ADD_BALLS, BALL_SAVE) = range(len(EFFECTS))  # fmt: skip
 # At most this many timers (the compiled code keeps those that end in a frame as bits).
 MAX_TIMERS = 63
 
@@ -32,11 +37,13 @@ class RuleBook(NamedTuple):
     trigger_kind: np.ndarray  # (R,) int64
     trigger_arg: np.ndarray  # (R,) int64: the bank, counter or timer
     trigger_at: np.ndarray  # (R,) int64: a counter trigger's count
-    trigger_ids: np.ndarray  # (R, n) int64: element ids (hit), lights (lights_on), flippers
+    trigger_ids: np.ndarray  # (R, n) int64: element ids (hit, locked), lights (lights_on),
+    # flippers
+    guard: np.ndarray  # (R,) int64: the light that must be lit for the rule to fire (-1: none)
     effect_start: np.ndarray  # (R + 1,) int64: rule r's effects are rows start[r]:start[r + 1]
     effect_kind: np.ndarray  # (X,) int64
-    effect_arg: np.ndarray  # (X,) int64: the counter, timer or kickback
-    effect_value: np.ndarray  # (X,) int64: points, steps, balls
+    effect_arg: np.ndarray  # (X,) int64: the counter, timer, kickback or lock
+    effect_value: np.ndarray  # (X,) int64: points, steps, balls, frames (ball_save)
     effect_lights: np.ndarray  # (X, L) int64: the lights acted on, in order
     timer_frames: np.ndarray  # (Tm,) int64: how long each timer runs [frames]
     timer_factor: np.ndarray  # (Tm,) int64
@@ -85,7 +92,7 @@ def compile_rules(table: Table) -> RuleBook:
             when.kind, when.names).index(when.names[0]) if when.kind in (
             "bank", "counter", "timer_ends") else -1)  # fmt: skip
         at.append(when.at)
-        if when.kind == "hit":
+        if when.kind in ("hit", "locked"):
             ids.append(element_ids(table, when.names))
         elif when.kind == "lights_on":
             ids.append([lights.index(name) for name in when.names])
@@ -95,13 +102,18 @@ def compile_rules(table: Table) -> RuleBook:
         else:
             ids.append([])
         for effect in rule.do:
-            index = {"count": counters, "start_timer": timers, "light_kickback": kickbacks}
+            index = {"count": counters, "start_timer": timers, "light_kickback": kickbacks,
+                     "release_lock": [lock.name for lock in table.locks]}  # fmt: skip
             target = index[effect.kind].index(effect.names[0]) if effect.kind in index else -1
             acted = [lights.index(n) for n in effect.names] if effect.kind in (
                 "light", "unlight", "rotate") else []  # fmt: skip
-            effects.append((EFFECTS.index(effect.kind), target, effect.value, acted))
+            value = round(effect.value * rate) if effect.kind == "ball_save" else effect.value
+            effects.append((EFFECTS.index(effect.kind), target, int(value), acted))
         starts.append(len(effects))
     timer_rows = rules.timers if rules else ()
+    guards = (
+        [-1 if r.if_lit is None else lights.index(r.if_lit) for r in rules.rules] if rules else []
+    )
     return RuleBook(
         active=rules is not None or table.ball_save is not None,
         order=np.array(rules.order() if rules else (), dtype=np.int64),
@@ -109,6 +121,7 @@ def compile_rules(table: Table) -> RuleBook:
         trigger_arg=np.array(arg, dtype=np.int64),
         trigger_at=np.array(at, dtype=np.int64),
         trigger_ids=_padded(ids),
+        guard=np.array(guards, dtype=np.int64),
         effect_start=np.array(starts, dtype=np.int64),
         effect_kind=np.array([e[0] for e in effects], dtype=np.int64),
         effect_arg=np.array([e[1] for e in effects], dtype=np.int64),
@@ -152,7 +165,7 @@ def run_rules(env, book, state, scores):
     for rule in book.order:
         kind, arg, ids = book.trigger_kind[rule], book.trigger_arg[rule], book.trigger_ids[rule]
         times = 0
-        if kind == HIT:
+        if kind in (HIT, LOCKED):
             for e in ids:
                 if e >= 0:
                     times += hits[e]
@@ -177,9 +190,16 @@ def run_rules(env, book, state, scores):
                     on = False
             times = 1 if on and not were_on[rule] else 0
             were_on[rule] = on
+        elif kind == MULTIBALL_STARTS:
+            times = state.multiball_events[env, 0]
+        elif kind == MULTIBALL_ENDS:
+            times = state.multiball_events[env, 1]
         else:  # COUNTER
             times = counters[arg] // book.trigger_at[rule]
             counters[arg] -= times * book.trigger_at[rule]
+        guard = book.guard[rule]
+        if guard >= 0 and not lights[guard]:
+            times = 0  # (if_lit) its light is out
         for _ in range(times):
             points += apply_effects(env, book, state, rule)
             events[rule] += 1
@@ -221,8 +241,14 @@ def apply_effects(env, book, state, rule):
             state.multiplier[env] = min(state.multiplier[env] + value, book.max_multiplier)
         elif kind == LIGHT_KICKBACK:
             state.world.kickback_lit[env, arg] = True
-        else:  # EXTRA_BALL
+        elif kind == EXTRA_BALL:
             state.balls_left[env] += value
+        elif kind == RELEASE_LOCK:  # Python lets them go (game.multiball) before the next frame
+            state.lock_release[env, arg] = True
+        elif kind == ADD_BALLS:
+            state.pending_balls[env] += value
+        else:  # BALL_SAVE
+            state.multiball_save[env] = max(state.multiball_save[env], value)
     return points
 
 

@@ -16,6 +16,27 @@ from pinball_env.physics import State
 from pinball_env.table.rules import RuleSet
 
 
+class BallSlots(NamedTuple):
+    """The World's several-ball arrays (``World.multi`` and its holders, see ``sim.world``),
+    held here so that a snapshot has them too; zero-size where the World has none."""
+
+    balls: np.ndarray  # (N, M, 5) float64: every ball slot
+    active: np.ndarray  # (N, M) bool: in play (on the table)
+    held: np.ndarray  # (N, M) bool: held by a saucer or a lock
+    holder: np.ndarray  # (N, M) int64: the element holding it (-1: none)
+    slot: np.ndarray  # (N, M) int64: its slot in a lock
+    held_time: np.ndarray  # (N, M) float64: how long it has been held [s]
+    released_from: np.ndarray  # (N, M) int64: the element it last left
+
+
+def ball_slots(world: Any) -> BallSlots:
+    """``world``'s several-ball arrays (it has the several-ball kernel) as a
+    :class:`BallSlots`: the arrays themselves, not copies."""
+    multi = world.multi
+    return BallSlots(multi.balls, multi.active, multi.held, world.holder, world.slot,
+                     world.held_time, world.released_from)  # fmt: skip
+
+
 class GameState(NamedTuple):
     """Everything that changes during play, for every env (the first axis)."""
 
@@ -50,9 +71,26 @@ class GameState(NamedTuple):
     # The flipper commands and cabinet buttons the last frame pressed (with sticky actions,
     # repeat_action_probability, the next frame may press them again).
     pressed: np.ndarray  # (N, F + 4) bool
+    # Several balls (a trough of more than one, see ``game.multiball``); ``world.balls`` and
+    # ``world.active`` are then the game's ball, the first in play (ball_slot).
+    slots: BallSlots  # the World's ball slots
+    ball_slot: np.ndarray  # (N,) int64: the slot of the game's ball (-1: none)
+    pending_balls: np.ndarray  # (N,) int64: balls the auto-plunger is still to launch
+    multiball: np.ndarray  # (N,) bool: two or more balls are in play
+    multiball_save: np.ndarray  # (N,) int64: frames the multiball's ball save still runs
+    multiball_events: np.ndarray  # (N, 2) int64: the frame's multiball starts and ends
+    multiballs: np.ndarray  # (N,) int64: multiballs started in the current game
+    lock_release: np.ndarray  # (N, K) bool: the rules released lock k in the frame
 
 
-def make_game_state(world: State, book: RuleBook, rule_set: RuleSet, n_flippers: int) -> GameState:
+def make_game_state(
+    world: State,
+    book: RuleBook,
+    rule_set: RuleSet,
+    n_flippers: int,
+    slots: BallSlots | None = None,
+    n_locks: int = 0,
+) -> GameState:
     """A :class:`GameState` around the kernel's ``world`` arrays (as many envs), every game at
     its start but for the balls (none left: :func:`clear_game` deals them).
 
@@ -61,12 +99,18 @@ def make_game_state(world: State, book: RuleBook, rule_set: RuleSet, n_flippers:
         book: the table's rules compiled (``game.rulebook``): its rules and timers.
         rule_set: the table's rules as data (an empty ``RuleSet`` without): its lights, counters.
         n_flippers: the table's flippers.
+        slots: the World's ball slots (``ball_slots(world)``); None: zero-size.
+        n_locks: the table's locks.
     """
     n_envs = len(world.active)
     n_rules = len(book.trigger_kind)
 
     def zeros(*shape: int, dtype: type = np.int64) -> np.ndarray:
         return np.zeros((n_envs, *shape), dtype=dtype)
+
+    no_slots = BallSlots(zeros(0, 5, dtype=np.float64), zeros(0, dtype=bool),
+                         zeros(0, dtype=bool), zeros(0), zeros(0), zeros(0, dtype=np.float64),
+                         zeros(0))  # fmt: skip
 
     return GameState(
         world=world,
@@ -96,6 +140,14 @@ def make_game_state(world: State, book: RuleBook, rule_set: RuleSet, n_flippers:
         lights_were_on=zeros(n_rules, dtype=bool),
         flippers_before=zeros(n_flippers, dtype=bool),
         pressed=zeros(world.flipper_command.shape[1] + len(CABINET_BUTTONS), dtype=bool),
+        slots=slots if slots is not None else no_slots,
+        ball_slot=np.full(n_envs, -1, dtype=np.int64),
+        pending_balls=zeros(),
+        multiball=zeros(dtype=bool),
+        multiball_save=zeros(),
+        multiball_events=zeros(2),
+        multiballs=zeros(),
+        lock_release=zeros(n_locks, dtype=bool),
     )
 
 
@@ -114,6 +166,10 @@ def clear_game(
     state.drained[env] = False
     state.frames[env] = 0
     state.pressed[env] = False
+    for array in (state.pending_balls, state.multiball, state.multiball_save,
+                  state.multiball_events, state.multiballs, state.lock_release):  # fmt: skip
+        array[env] = 0
+    state.ball_slot[env] = -1
     if lights is not None:
         state.lights[env] = lights
         for array in (state.counters, state.timers, state.bonus, state.rule_points,

@@ -5,6 +5,11 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 
 - ``sweep.py``: swept ball-segment and ball-circle tests, point-segment distance;
 - ``flipper.py``: swept contact with a rotating flipper (a kinematic tapered capsule);
+- ``balls.py``: ball-ball contact, the swept test of two moving balls and the impulsive response;
+- ``multiball.py``: several balls per env (``MultiState``), the frame step with ball-ball contact
+  in one event loop (``step_balls``, ``step_multiworld``), and a helper to build and step such
+  a world (``make_multiball``); a kernel path of its own, for tables of several balls (the
+  game's multiball, ``game.multiball``);
 - ``step.py``: the world step over a batch of envs, split into named helpers;
 - ``near.py``: the broad phase, each ball's candidate set of the elements it can reach soon;
 - ``rays.py``: ray casts from the ball against walls, posts and flippers (the observation's rays);
@@ -16,6 +21,7 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 - ``columns.py``: what each column of those arrays means.
 """
 
+from pinball_env.physics.balls import respond_ball_ball, sweep_ball_ball
 from pinball_env.physics.data import (
     CONTACT_CAPACITY,
     Geometry,
@@ -67,9 +73,11 @@ __all__ = [
     "make_state",
     "point_segment_distance",
     "respond",
+    "respond_ball_ball",
     "segment_bounds",
     "step_tables",
     "step_world",
+    "sweep_ball_ball",
     "sweep_capsule",
     "sweep_circle",
     "sweep_circle_circle",

@@ -604,10 +604,12 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 if is_hit(speed, kick_scale * props[PROP_KICK], settings.resting_speed):
                     hit_elements[n_hits] = element
                     n_hits += 1
-                if element >= flipper_id and svx * nx + svy * ny > 0.0:
-                    pushers |= 1 << (element - flipper_id)
-                if element >= flipper_id and omegas[element - flipper_id] != 0.0:
-                    turning_contact = True
+                # Only a flipper's contact reads its row (drop targets' ids come after theirs).
+                if flipper_id <= element < flipper_id + n_flippers:
+                    if svx * nx + svy * ny > 0.0:
+                        pushers |= 1 << (element - flipper_id)
+                    if omegas[element - flipper_id] != 0.0:
+                        turning_contact = True
                 stalled = stalled + 1 if used <= MIN_PROGRESS * h else 0
                 if stalled >= MAX_STALLED_PASSES:
                     break

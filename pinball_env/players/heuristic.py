@@ -166,6 +166,23 @@ def fall_time(height: float, vy: float, gy: float) -> float:
     return 2.0 * height / (math.sqrt(root) - vy)
 
 
+def most_urgent(info: Mapping[str, Any], gy: float) -> tuple[np.ndarray, np.ndarray]:
+    """The balls in play of a game of several balls (``info``'s ``ball_positions``,
+    ``ball_velocities``, ``balls_in_play``), (K, 2) positions and velocities, the most urgent
+    first: the soonest to fall to the flippers' level (the lowest, where they fall as fast); the
+    game's ball (``ball_position``) where none is in play."""
+    playing = np.asarray(info["balls_in_play"], dtype=bool)
+    if not playing.any():
+        return (np.asarray(info["ball_position"])[None],
+                np.asarray(info["ball_velocity"])[None])  # fmt: skip
+    position = np.asarray(info["ball_positions"])[playing]
+    velocity = np.asarray(info["ball_velocities"])[playing]
+    times = [fall_time(max(float(p[1]), 0.0), float(v[1]), gy)
+             for p, v in zip(position, velocity, strict=True)]  # fmt: skip
+    order = np.argsort(times, kind="stable")
+    return position[order], velocity[order]
+
+
 class HeuristicPolicy:
     """Flip each flipper just before the ball reaches it; catch a falling ball and aim it.
 
@@ -303,17 +320,22 @@ class HeuristicPolicy:
 
     def buttons(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
         """The buttons (one per entry of ``BUTTONS``) for a ball at ``position`` [m] moving at
-        ``velocity`` [m/s]."""
-        x, y = float(position[0]), float(position[1])
-        vx, vy = float(velocity[0]), float(velocity[1])
+        ``velocity`` [m/s]; or, given (M, 2) arrays, for several balls, the most urgent first
+        (:func:`most_urgent`): a resting flipper flips for the first ball that calls for it, a
+        raised one stays up for the first that is landing on it."""
+        position, velocity = np.asarray(position, float), np.asarray(velocity, float)
+        balls = [(float(p[0]), float(p[1]), float(v[0]), float(v[1]))
+                 for p, v in zip(position.reshape(-1, 2), velocity.reshape(-1, 2),
+                                 strict=True)]  # fmt: skip
         pressed = np.zeros(len(BUTTONS), dtype=bool)
         for j, held in enumerate(self._held):
             if held == 0:
-                up = self._flip(j, x, y, vx, vy)
+                up = any(self._flip(j, *ball) for ball in balls)
             elif held < self.hold_frames:
                 up = True
             else:
-                up = self.catch and held < self._max_hold and self._keep(j, x, y, vx, vy)
+                up = (self.catch and held < self._max_hold
+                      and any(self._keep(j, *ball) for ball in balls))  # fmt: skip
             self._held[j] = held + 1 if up else 0
             pressed[self._buttons[j]] |= up
         return pressed
@@ -385,7 +407,11 @@ class HeuristicPolicy:
 
     def __call__(self, info: Mapping[str, Any]) -> int | np.ndarray:
         """The action for the env state described by ``info`` (from reset or step)."""
-        pressed = self.buttons(info["ball_position"], info["ball_velocity"])
+        if "balls_in_play" in info:  # several balls: those in play, the most urgent first
+            position, velocity = most_urgent(info, self.table.gravity_vector[1])
+        else:
+            position, velocity = info["ball_position"], info["ball_velocity"]
+        pressed = self.buttons(position, velocity)
         if self.cabinet:
             pressed = np.concatenate([pressed, self.cabinet_buttons(info)])
         if self.action_type == "multibinary":

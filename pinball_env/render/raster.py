@@ -178,6 +178,12 @@ class Renderer:
             paint_line(image, *target.segment, TARGET_HALF_WIDTH * scale, rgb(TARGET), *view)
         for line in (*table.spinners, *table.kickbacks):
             paint_line(image, *line.segment, SENSOR_HALF_WIDTH * scale, rgb(SENSOR), *view)
+        # Saucers (a hole) and locks (a hole per slot), where balls are held (multiball).
+        for saucer in table.saucers:
+            paint_disc(image, *saucer.center, saucer.radius, rgb(DRAIN), *view)
+        for lock in table.locks:
+            for slot in lock.slots:
+                paint_disc(image, *slot, 1.2 * table.ball.radius, rgb(SENSOR), *view)
         image.flags.writeable = False  # frames copy it; nothing may paint on it
         return image
 
@@ -190,14 +196,16 @@ class Renderer:
         on_plunger: bool = False,
         cabinet_offset: tuple[float, float] | None = None,
         targets: TargetsView | None = None,
+        other_balls: Sequence[tuple[float, float]] | None = None,
     ) -> np.ndarray:
         """The table with the flippers at ``flipper_angles`` [rad] (one per ``table.flippers``
         entry, in order) and the ball at ``ball_position`` [m] (None: out of play, not drawn),
         as a new (height, width, 3) uint8 array. The cabinet's and the targets' arguments are
-        :meth:`frames`'s, for the one env (``targets`` a batch of one)."""
+        :meth:`frames`'s, for the one env (``targets`` a batch of one); ``other_balls`` are
+        more balls' centres [m] (several balls), drawn too."""
         return self._one(
             ball_position, flipper_angles, False, plunger_pull, on_plunger, cabinet_offset,
-            targets,
+            targets, other_balls,
         )  # fmt: skip
 
     def grayscale(
@@ -229,6 +237,8 @@ class Renderer:
         on_plunger: np.ndarray | None = None,
         cabinet_offset: np.ndarray | None = None,
         targets: TargetsView | None = None,
+        other_balls: np.ndarray | None = None,
+        other_visible: np.ndarray | None = None,
     ) -> np.ndarray:
         """Frames of a batch of envs: ball centres ``balls`` (N, >= 2) [m], drawn where
         ``visible`` (N,) bool, flippers at ``flipper_angles`` (N, F) [rad]. Returns (N, height,
@@ -242,7 +252,10 @@ class Renderer:
         ``CABINET_Y`` columns, times an exaggeration if wanted, see SHAKE_EXAGGERATION).
 
         ``targets`` (a table with targets or rules) draws the drop targets standing or fallen,
-        the spinners' flaps as they turn, the kickbacks' lamps and the rules' lights."""
+        the spinners' flaps as they turn, the kickbacks' lamps and the rules' lights.
+
+        Several balls: ``other_balls`` (N, K, >= 2) [m] more balls' centres, drawn where
+        ``other_visible`` (N, K) bool (on top of everything but the first ball)."""
         flipper_angles = np.asarray(flipper_angles, dtype=np.float64)
         if flipper_angles.ndim != 2 or flipper_angles.shape[1] != len(self._flippers):
             raise ValueError(
@@ -272,6 +285,13 @@ class Renderer:
             threads.run(draw_moving_parts, n, *args)
         if targets is not None:
             self._paint_targets(pictures, targets, balls, visible, shifts, grayscale)
+        if other_balls is not None:
+            colour = luminance(BALL) if grayscale else rgb(BALL)
+            radius, view = self.table.ball.radius, self._view
+            for env, k in zip(*np.nonzero(other_visible), strict=True):
+                dx, dy = shifts[env, 1] / view[0], -shifts[env, 0] / view[1]
+                x, y = other_balls[env, k, 0] + dx, other_balls[env, k, 1] + dy
+                paint_disc(pictures[env], x, y, radius, colour, *view)
         if not fills:
             out[...] = luminance(BACKGROUND) if grayscale else BACKGROUND
             out[:, self.top : self.top + rows, self.left : self.left + columns] = pictures
@@ -369,6 +389,7 @@ class Renderer:
         on_plunger: bool = False,
         cabinet_offset: tuple[float, float] | None = None,
         targets: TargetsView | None = None,
+        other_balls: Sequence[tuple[float, float]] | None = None,
     ) -> np.ndarray:
         if len(flipper_angles) != len(self._flippers):
             raise ValueError(
@@ -380,9 +401,14 @@ class Renderer:
         pull = None if plunger_pull is None else np.array([plunger_pull], dtype=np.float64)
         waiting = None if pull is None and not on_plunger else np.array([on_plunger])
         offset = None if cabinet_offset is None else np.array([cabinet_offset], dtype=np.float64)
+        more = visible_more = None
+        if other_balls is not None:
+            more = np.array(other_balls, dtype=np.float64).reshape(1, -1, 2)
+            visible_more = np.ones(more.shape[:2], dtype=bool)
         return self.frames(
             ball, np.array([visible]), angles, grayscale, plunger_pull=pull,
-            on_plunger=waiting, cabinet_offset=offset, targets=targets,
+            on_plunger=waiting, cabinet_offset=offset, targets=targets, other_balls=more,
+            other_visible=visible_more,
         )[0]  # fmt: skip
 
 

@@ -16,7 +16,7 @@ _FONT = {
     "C": (7, 4, 4, 4, 7), "E": (7, 4, 7, 4, 7), "G": (7, 4, 5, 5, 7), "I": (7, 2, 2, 2, 7),
     "L": (4, 4, 4, 4, 7), "N": (6, 5, 5, 5, 5), "O": (7, 5, 5, 5, 7), "R": (6, 5, 6, 5, 5),
     "S": (7, 4, 7, 1, 7), "T": (7, 2, 2, 2, 2), "W": (5, 5, 7, 7, 5), "/": (1, 1, 2, 4, 4),
-    "U": (5, 5, 5, 5, 7), "X": (5, 5, 2, 5, 5),
+    "U": (5, 5, 5, 5, 7), "X": (5, 5, 2, 5, 5), "H": (5, 5, 7, 5, 5),
     " ": (0, 0, 0, 0, 0),
 }  # fmt: skip
 
@@ -46,18 +46,22 @@ def scoreboard(
     tilted: bool = False,
     bonus: int | None = None,
     multiplier: int = 1,
+    trough: int | None = None,
 ) -> np.ndarray:
     """A (height, width, 3) uint8 strip showing the score and the balls left, as a machine's
     display does beside the playfield; below them, on a table with the cabinet, ``TILT`` while
     ``tilted``, else ``WARNING`` and ``tilt_warnings``/``allowed_warnings`` while a warning
     stands (nothing when none does, so that a table without a cabinet is drawn as before); on a
-    table with rules (``bonus`` given) ``BONUS``, the bonus and ``X`` the multiplier."""
+    table with rules (``bonus`` given) ``BONUS``, the bonus and ``X`` the multiplier; on a table
+    of several balls (``trough`` given) ``TROUGH`` and the balls waiting in it."""
     strip = np.empty((height, width, 3), dtype=np.uint8)
     strip[...] = BACKGROUND
     sections: list[tuple[str, str | None, Colour]] = [
         ("SCORE", str(int(score)), SCOREBOARD_TEXT),
         ("BALLS", str(int(balls_left)), SCOREBOARD_TEXT),
     ]
+    if trough is not None:
+        sections.append(("TROUGH", str(int(trough)), SCOREBOARD_TEXT))
     if bonus is not None:
         sections.append(("BONUS", f"{int(bonus)} X{int(multiplier)}", SCOREBOARD_TEXT))
     if tilted:

@@ -6,6 +6,26 @@ packed table). The single env is a World of one; a vector env is a World of N ca
 kernel, :func:`~pinball_env.physics.step_world`. :meth:`World.set_table` gives an env a table of
 its own (generated layouts): the World then steps every env on its own table in one call of
 :func:`~pinball_env.physics.step_tables`. Physics backends swap :meth:`World._advance`.
+
+Several balls (multiball, issue 49). A table whose trough holds several balls gives every env
+``n_balls`` ball slots; such a table, or one with saucers or locks, is stepped by
+:func:`~pinball_env.physics.multiball.step_multiworld` (ball-ball contact, held balls), every
+other table by ``step_world`` exactly as before. Code written once for any number of balls reads
+``ball_states`` (N, M, 5), ``ball_active`` and ``ball_held`` (N, M) (for one ball, views over
+``balls`` and ``active``) and calls ``place_ball``/``launch`` with ``ball=``, ``hold_ball``,
+``release_ball`` and ``release_lock``. ``balls`` and ``active`` (and ``state.balls``,
+``state.active``) are ball 0's for one ball; with several they are not the balls: ``balls`` and
+``active`` raise, ``state.balls`` and ``state.active`` are left unused.
+
+Saucers and locks are played here, at the end of each frame (after the physics, for either
+backend): a free ball in play within a saucer's ``radius`` of its centre and slower than its
+``capture_speed`` is captured (held at the centre, at rest), counted as a hit of the saucer (its
+element id follows the kickbacks: ``frame_points`` scores it) and released at its ``kick``
+after ``hold_time``; a lock holds a ball that comes within ``Lock.capture_radius`` of its next
+free slot (slots fill in order) slower than its ``capture_speed``, a hit of the lock, until
+:meth:`World.release_lock` lets its balls go at its ``kick``. A released ball is not captured
+again by the same saucer or lock until it has left its capture radius. The test is on the
+frame's end state (a ball slow enough to be captured moves less than a centimetre a frame).
 """
 
 import math
@@ -33,6 +53,8 @@ from pinball_env.physics.columns import (
     CONTACT_TIME,
     FLIPPER_REST_ANGLE,
 )
+from pinball_env.physics.data import element_count, log_contact
+from pinball_env.physics.multiball import make_multi_scratch, make_multi_state, step_multiworld
 from pinball_env.sim.parallel import EnvThreads
 from pinball_env.sim.tables import EnvTables
 from pinball_env.table import BUTTONS, Table
@@ -82,10 +104,15 @@ class World:
         scratch: the kernel's per-env work arrays.
         num_threads: threads that share the envs of a frame (the kernel releases the GIL; the
             results are bitwise the same for any count).
+        n_balls: ball slots per env (``table.n_balls``: the trough's balls, else 1).
+        multi, mscratch, pair: the several-ball state (``physics.multiball.MultiState``), its
+            work arrays and the ball-ball material row (``table.pack_ball_pair()``), where the
+            table has several balls, saucers or locks; None otherwise (``step_world``).
     """
 
     # Whether the physics is the swept kernel's ``step_ball``, which compiled loops over frames
-    # (the game's step) may call directly; a backend that swaps :meth:`_advance` says no.
+    # (the game's step) may call directly; a backend that swaps :meth:`_advance` says no, and so
+    # does a World on the several-ball kernel (several balls, saucers or locks).
     swept_kernel: ClassVar[bool] = True
 
     def __init__(self, table: Table, n_envs: int = 1, num_threads: int = 1) -> None:
@@ -97,6 +124,33 @@ class World:
         # Column of the buttons array that drives each flipper.
         self.flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
         self._everyone = np.ones(n_envs, dtype=bool)  # the kernel's mask that steps every env
+        self.n_balls = table.n_balls
+        self.multi: Any = None
+        self.mscratch: Any = None
+        self.pair: np.ndarray | None = None
+        if self.n_balls > 1 or table.saucers or table.locks:
+            self.multi = make_multi_state(n_envs, self.n_balls)
+            self.mscratch = make_multi_scratch(self.geometry, n_envs, self.n_balls)
+            self.pair = table.pack_ball_pair()
+            self._alias_ball_zero()
+            hits = np.zeros((n_envs, len(table.element_scores)), dtype=np.int64)
+            self.state = self.state._replace(hits=hits)  # the saucers' and locks' ids too
+            # The game's compiled loop must not call step_ball for it: it hands each frame
+            # to step() (the several-ball kernel, then the saucers and locks).
+            self.swept_kernel = False  # type: ignore[misc]
+        # Saucers and locks, by element id (after every packed element); per ball: the element
+        # holding it (-1: none), its slot in a lock, how long it has been held [s], and the
+        # element it was last released from (not captured by it again until it is out of
+        # reach; -1: none).
+        first = element_count(self.geometry)
+        self.saucer_ids = np.arange(first, first + len(table.saucers))
+        self.lock_ids = np.arange(first + len(table.saucers),
+                                  first + len(table.saucers) + len(table.locks))  # fmt: skip
+        shape = (n_envs, self.n_balls)
+        self.holder = np.full(shape, -1, dtype=np.int64)
+        self.slot = np.full(shape, -1, dtype=np.int64)
+        self.held_time = np.zeros(shape)
+        self.released_from = np.full(shape, -1, dtype=np.int64)
         for env in range(n_envs):
             self.reset_targets(env)
             self.rest_flippers(env)
@@ -127,19 +181,76 @@ class World:
         """(n_envs, elements) int64: points per element id, per env."""
         return self.tables.scores
 
+    def _alias_ball_zero(self) -> None:
+        """With one ball slot, ``state.balls`` and ``state.active`` are the multi-ball arrays'
+        (views), so one-ball code reads and writes the ball the kernel steps."""
+        if self.multi is not None and self.n_balls == 1:
+            self.state = self.state._replace(
+                balls=self.multi.balls[:, 0], active=self.multi.active[:, 0]
+            )
+
     # Shorthands for the arrays used most.
     @property
     def balls(self) -> np.ndarray:
+        """(n_envs, 5) the ball of each env (one ball slot; several: use ``ball_states``)."""
+        if self.n_balls > 1:
+            raise AttributeError(
+                f"world.balls is one ball's; this table has {self.n_balls}: use "
+                "world.ball_states (n_envs, n_balls, 5)"
+            )
         return self.state.balls
 
     @property
     def active(self) -> np.ndarray:
+        """(n_envs,) whether each env's ball is in play (one slot; several: ``ball_active``)."""
+        if self.n_balls > 1:
+            raise AttributeError(
+                f"world.active is one ball's; this table has {self.n_balls}: use "
+                "world.ball_active (n_envs, n_balls)"
+            )
         return self.state.active
 
+    @property
+    def ball_states(self) -> np.ndarray:
+        """(n_envs, n_balls, 5) every ball slot's state (columns ``BALL_*``), writable; for one
+        ball a view over ``balls``."""
+        return self.state.balls[:, None, :] if self.multi is None else self.multi.balls
+
+    @property
+    def ball_active(self) -> np.ndarray:
+        """(n_envs, n_balls) bool: the ball is in play (cleared when it drains); writable."""
+        return self.state.active[:, None] if self.multi is None else self.multi.active
+
+    @property
+    def ball_held(self) -> np.ndarray:
+        """(n_envs, n_balls) bool: the ball is held (a saucer, a lock, :meth:`hold_ball`): it
+        does not move and is a fixed circle to the others. Read-only by convention: use
+        :meth:`hold_ball` and :meth:`release_ball`."""
+        if self.multi is None:
+            return np.zeros((self.n_envs, 1), dtype=np.bool_)
+        return self.multi.held
+
+    def _check_ball(self, ball: int) -> int:
+        if not 0 <= ball < self.n_balls:
+            raise ValueError(f"ball must be in [0, {self.n_balls}), got {ball}")
+        return int(ball)
+
+    def _free(self, env: int, ball: int) -> None:
+        """Ball ``ball`` of env ``env`` is no longer held by anything."""
+        self.holder[env, ball] = self.slot[env, ball] = -1
+        self.held_time[env, ball] = 0.0
+        if self.multi is not None:
+            self.multi.held[env, ball] = False
+
     def place_ball(
-        self, env: int, position: tuple[float, float], velocity: tuple[float, float] = (0.0, 0.0)
+        self,
+        env: int,
+        position: tuple[float, float],
+        velocity: tuple[float, float] = (0.0, 0.0),
+        ball: int = 0,
     ) -> None:
-        """Put env ``env``'s ball in play at ``position`` [m] with ``velocity`` [m/s], no spin.
+        """Put env ``env``'s ball ``ball`` (a slot, 0 by default) in play, free, at
+        ``position`` [m] with ``velocity`` [m/s], no spin.
 
         Raises ValueError for a non-finite position or velocity, or a speed above
         MAX_PLACE_SPEED. (This is the physics API: tables and resets check more, see
@@ -155,15 +266,109 @@ class World:
             raise ValueError(
                 f"ball speed {math.hypot(vx, vy):g} m/s is above {MAX_PLACE_SPEED:g} m/s"
             )
-        ball = self.state.balls[env]
-        ball[:] = 0.0
-        ball[BALL_X], ball[BALL_Y] = position
-        ball[BALL_VX], ball[BALL_VY] = velocity
-        self.state.active[env] = True
+        ball = self._check_ball(ball)
+        row = self.ball_states[env, ball]
+        row[:] = 0.0
+        row[BALL_X], row[BALL_Y] = position
+        row[BALL_VX], row[BALL_VY] = velocity
+        self.ball_active[env, ball] = True
+        self._free(env, ball)
+        self.released_from[env, ball] = -1
 
-    def launch(self, env: int, speed: float) -> None:
-        """Put env ``env``'s ball on the plunger and fire it up the shooter lane at ``speed``."""
+    def launch(self, env: int, speed: float, ball: int = 0) -> None:
+        """Put env ``env``'s ball ``ball`` (0 by default) on the plunger and fire it up the
+        shooter lane at ``speed``."""
+        if ball != 0:
+            table = self.table_of(env)
+            if table.plunger is None:
+                raise ValueError(f"table {table.name!r} has no plunger")
+            self._check_speeds(np.array([speed], dtype=np.float64))
+            self.place_ball(env, table.plunger.position, (0.0, float(speed)), ball)
+            return
         self.launch_balls([env], [speed])
+
+    def hold_ball(self, env: int, ball: int, position: tuple[float, float]) -> None:
+        """Hold env ``env``'s ball ``ball`` at ``position`` [m], at rest and immovable (a fixed
+        circle to the other balls) until :meth:`release_ball`; it is in play. Needs the
+        several-ball kernel (a table with a trough of several balls, saucers or locks) or the
+        pymunk backend."""
+        ball = self._check_ball(ball)
+        if self.multi is None:
+            raise ValueError(
+                f"table {self.table.name!r} has one ball and no saucer or lock: nothing holds "
+                "a ball"
+            )
+        self.place_ball(env, position, (0.0, 0.0), ball)
+        self.multi.held[env, ball] = True
+
+    def release_ball(self, env: int, ball: int, velocity: tuple[float, float]) -> None:
+        """Let env ``env``'s held ball ``ball`` go, where it is, at ``velocity`` [m/s]."""
+        ball = self._check_ball(ball)
+        row = self.ball_states[env, ball]
+        self.place_ball(env, (row[BALL_X], row[BALL_Y]), velocity, ball)
+        self.released_from[env, ball] = -1
+
+    def release_lock(self, env: int, lock: int) -> int:
+        """Let every ball that env ``env``'s lock ``lock`` (an index into ``table.locks``)
+        holds go at the lock's ``kick``; returns how many."""
+        element = int(self.lock_ids[lock])
+        kick = self.table_of(env).locks[lock].kick
+        balls = np.flatnonzero(self.holder[env] == element)
+        for ball in balls:
+            self.release_ball(env, int(ball), kick)
+            self.released_from[env, ball] = element
+        return len(balls)
+
+    def _capture(self, env: int, ball: int, element: int, position: tuple, slot: int) -> None:
+        speed = float(np.hypot(*self.ball_states[env, ball, [BALL_VX, BALL_VY]]))
+        self.hold_ball(env, ball, position)
+        self.holder[env, ball], self.slot[env, ball] = element, slot
+        self.state.hits[env, element] += 1
+        log_contact(self.state, env, element, self.settings.dt, speed)
+
+    def _play_holders(self, envs: np.ndarray | None) -> None:
+        """The saucers and locks at the end of a frame (module docstring): held saucer balls
+        count their time and leave at the kick; free slow balls near a free saucer or the next
+        free slot of a lock are captured."""
+        table, r, dt = self.table, self.settings.radius, self.settings.dt
+        states, active, held = self.ball_states, self.ball_active, self.multi.held
+        stepped = np.ones(self.n_envs, bool) if envs is None else np.asarray(envs, dtype=bool)
+        xy = states[..., [BALL_X, BALL_Y]]
+        speed = np.hypot(states[..., BALL_VX], states[..., BALL_VY])
+        free = active & ~held & stepped[:, None]
+        for s, saucer in enumerate(table.saucers):
+            element = int(self.saucer_ids[s])
+            mine = (self.holder == element) & stepped[:, None]
+            self.held_time[mine] += dt
+            due = mine & (self.held_time >= saucer.hold_time - 1e-9)
+            for env, ball in zip(*np.nonzero(due), strict=True):
+                self.release_ball(int(env), int(ball), saucer.kick)
+                self.released_from[env, ball] = element
+            near = np.hypot(*(xy - saucer.center).transpose(2, 0, 1)) <= saucer.radius
+            self.released_from[(self.released_from == element) & ~near] = -1
+            catch = free & near & (speed < saucer.capture_speed)
+            catch &= self.released_from != element
+            for env in np.flatnonzero(catch.any(axis=1)):
+                if (self.holder[env] == element).any():
+                    continue  # one ball at a time
+                ball = int(np.flatnonzero(catch[env])[0])
+                self._capture(int(env), ball, element, saucer.center, 0)
+                free[env, ball] = False
+        for k, lock in enumerate(table.locks):
+            element, reach = int(self.lock_ids[k]), lock.capture_radius(r)
+            slots = np.asarray(lock.slots)
+            gaps = np.hypot(*(xy[:, :, None, :] - slots).transpose(3, 0, 1, 2))  # (N, M, slots)
+            self.released_from[(self.released_from == element) & (gaps.min(axis=2) > reach)] = -1
+            catch = free & (speed < lock.capture_speed) & (self.released_from != element)
+            for env in np.flatnonzero(catch.any(axis=1)):
+                taken = set(self.slot[env, self.holder[env] == element].tolist())
+                for ball in np.flatnonzero(catch[env]):
+                    slot = next((j for j in range(len(slots)) if j not in taken), -1)
+                    if slot < 0 or gaps[env, ball, slot] > reach:
+                        continue
+                    self._capture(int(env), int(ball), element, lock.slots[slot], slot)
+                    taken.add(slot)
+                    free[env, ball] = False
 
     def launch_balls(self, envs: Sequence[int], speeds: Sequence[float]) -> None:
         """:meth:`launch` for each of ``envs`` at its entry of ``speeds`` [m/s], at once."""
@@ -175,15 +380,25 @@ class World:
                 raise ValueError(f"table {table.name!r} has no plunger")
             positions.append(table.plunger.position)
         speeds = np.asarray(speeds, dtype=np.float64)
-        if not np.isfinite(speeds).all() or (np.abs(speeds) > MAX_PLACE_SPEED).any():
-            raise ValueError(f"launch speeds must be finite and at most {MAX_PLACE_SPEED:g} m/s, "
-                             f"got {speeds.tolist()}")  # fmt: skip
+        self._check_speeds(speeds)
         balls = self.state.balls
         balls[envs] = 0.0
         balls[envs, BALL_X] = [x for x, _ in positions]
         balls[envs, BALL_Y] = [y for _, y in positions]
         balls[envs, BALL_VY] = speeds
         self.state.active[envs] = True
+        if self.n_balls > 1:  # ball 0's slot (state.balls is not the balls)
+            self.ball_states[envs, 0] = balls[envs]
+            self.ball_active[envs, 0] = True
+        for env in envs:
+            self._free(int(env), 0)
+            self.released_from[env, 0] = -1
+
+    @staticmethod
+    def _check_speeds(speeds: np.ndarray) -> None:
+        if not np.isfinite(speeds).all() or (np.abs(speeds) > MAX_PLACE_SPEED).any():
+            raise ValueError(f"launch speeds must be finite and at most {MAX_PLACE_SPEED:g} m/s, "
+                             f"got {speeds.tolist()}")  # fmt: skip
 
     def rest_flippers(self, env: int) -> None:
         """Put env ``env``'s flippers at rest against their lower stops, released."""
@@ -211,7 +426,14 @@ class World:
     def set_table(self, env: int, table: Table) -> None:
         """Make env ``env`` play ``table`` from now on: its flippers at rest, its ball at the
         table's start. The table needs the flippers of the World's table, driven by the same
-        buttons (its other elements may differ in number and kind)."""
+        buttons (its other elements may differ in number and kind). Tables of several balls,
+        saucers or locks play alone (a ValueError: the several-ball kernel takes one table)."""
+        for which in (self.table, table):
+            if self.multi is not None or which.n_balls > 1 or which.saucers or which.locks:
+                raise ValueError(
+                    f"table {which.name!r} has several balls, saucers or locks: a World of it "
+                    "plays one table in every env"
+                )
         if table.flipper_buttons != self.table.flipper_buttons:
             raise ValueError(
                 f"table {table.name!r} has flippers on buttons {table.flipper_buttons}, the "
@@ -278,8 +500,10 @@ class World:
             else:
                 self.state.flipper_command[envs] = commands[envs]
         if self._advance(envs):
-            bad = np.flatnonzero(~np.isfinite(self.state.balls).all(axis=1)).tolist()
+            bad = np.flatnonzero(~np.isfinite(self.ball_states).all(axis=(1, 2))).tolist()
             raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
+        if self.multi is not None and (self.table.saucers or self.table.locks):
+            self._play_holders(envs)
 
     def _advance(self, envs: np.ndarray | None = None) -> int:
         """One frame of physics on the state arrays of ``envs`` (a bool mask; None: all): the
@@ -288,7 +512,10 @@ class World:
         moving = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
         if moving.shape != (self.n_envs,):
             raise ValueError(f"envs must have shape ({self.n_envs},), got {moving.shape}")
-        if self.tables.varied:
+        if self.multi is not None:
+            args = (self.geometry, self.settings, self.state, self.scratch, self.multi,
+                    self.mscratch, self.pair, moving)  # fmt: skip
+        elif self.tables.varied:
             geometries, settings = self.tables.kernel_arrays()
             args = (geometries, settings, self.state, self.scratch, moving)
         else:
@@ -296,9 +523,12 @@ class World:
         return sum(self.threads.run(self._kernel(args), self.n_envs, *args))
 
     def _kernel(self, args: tuple) -> Callable[..., int]:
-        """``step_world``'s (or ``step_tables``') compiled entry for these arrays' types."""
+        """``step_world``'s (or ``step_tables``', ``step_multiworld``'s) compiled entry for these
+        arrays' types."""
         if self._entry is None:
             step = step_tables if self.tables.varied else step_world
+            if self.multi is not None:
+                step = step_multiworld
             self._entry = compiled_entry(step, (*args, 0, 0))
         return self._entry
 
@@ -306,6 +536,10 @@ class World:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
         return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._alias_ball_zero()  # a pickle copies views apart
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""
@@ -326,11 +560,12 @@ class World:
         ]
 
     def trace(self, n_frames: int, env: int = 0, buttons: np.ndarray | None = None) -> np.ndarray:
-        """Step ``n_frames`` frames and return env ``env``'s ball centre after each, (n, 2)."""
+        """Step ``n_frames`` frames and return env ``env``'s ball 0's centre after each,
+        (n, 2)."""
         path = np.empty((n_frames, 2))
         for frame in range(n_frames):
             self.step(buttons)
-            path[frame] = self.state.balls[env, [BALL_X, BALL_Y]]
+            path[frame] = self.ball_states[env, 0, [BALL_X, BALL_Y]]
         return path
 
 

@@ -1,7 +1,8 @@
 """The table's elements in a description: materials, walls, posts, flippers, sensors, the
-plunger (and its skill shot), stand-up targets, drop banks, spinners and kickbacks, each with its
-keys and its physically sensible ranges, and the checks that tie them together (unique names,
-known materials, kickers that lose energy, and the geometry checks of
+plunger (and its skill shot), stand-up targets, drop banks, spinners and kickbacks, the multiball
+elements (saucers, locks and the trough with its auto-plunger), each with its keys and its
+physically sensible ranges, and the checks that tie them together (unique names, known
+materials, kickers that lose energy, and the geometry checks of
 :mod:`~pinball_env.table.geometry`).
 
 A value outside a range is a typo (or an attack): it would make the ball, the table or the work
@@ -49,17 +50,21 @@ from pinball_env.table.geometry import (
 )
 from pinball_env.table.model import (
     BUTTONS,
+    AutoPlunger,
     DropBank,
     DropTarget,
     Flipper,
     Kickback,
+    Lock,
     Material,
     Plunger,
     Post,
+    Saucer,
     Sensor,
     SkillShot,
     Spinner,
     StandupTarget,
+    Trough,
     Wall,
 )
 
@@ -75,6 +80,13 @@ MAX_SPINNERS = 16
 MAX_KICKBACKS = 8
 MAX_SWING = 90.0  # a flipper's |up_angle - rest_angle| [deg]
 MAX_KICKBACK_SPEED = 10.0  # a real kickback fires the ball at a few m/s [m/s]
+# Multiball: every held ball (in a saucer or a lock's slot) is one more immovable circle, and
+# every ball in the machine one more moving one, for the kernel to sweep.
+MAX_SAUCERS = 8
+MAX_LOCKS = 4
+MAX_LOCK_SLOTS = 6  # per lock
+MAX_BALLS = 6  # in the machine (the trough's balls)
+MAX_EJECT_SPEED = 10.0  # a saucer's kick and a lock's release, like a kickback's [m/s]
 
 _flipper_radius = partial(number, low=0.001, high=0.1, unit="m")
 _kick = partial(number, low=0.0, high=10.0, unit="m/s")  # a real pop bumper adds ~1.5 m/s
@@ -179,11 +191,47 @@ KICKBACK_FIELDS = {
 }
 
 
+def _eject_velocity(value: object, loc: Where) -> tuple[float, float]:
+    """velocity [vx, vy] in m/s, its speed in (0, 10] m/s"""  # 10: MAX_EJECT_SPEED
+    kick = velocity_pair(value, loc)
+    _check_kick(kick, loc, MAX_EJECT_SPEED, "a real saucer or lock kicks the ball out")
+    return kick
+
+
+# Multiball.
+_capture_radius = partial(number, low=0.01, high=0.1, unit="m")
+_capture_speed = partial(number, low=0.05, high=5.0, unit="m/s")
+SAUCER_FIELDS = {
+    "name": string,
+    "center": POINT,
+    "radius": _capture_radius,
+    "capture_speed": _capture_speed,
+    "hold_time": partial(number, low=0.05, high=10.0, unit="s"),
+    "kick": _eject_velocity,
+    "score": score,
+}
+LOCK_FIELDS = {
+    "name": string,
+    "slots": partial(point_list, point=POINT, min_len=1, max_len=MAX_LOCK_SLOTS),
+    # Absent: the ball's radius (a real lock's slot is a ball-sized pocket).
+    "radius": partial(number, low=0.002, high=0.1, unit="m"),
+    "capture_speed": _capture_speed,
+    "kick": _eject_velocity,
+    "score": score,
+}
+AUTO_PLUNGER_FIELDS = {"speed": _speed}
+TROUGH_FIELDS = {
+    "balls": partial(number, low=1, high=MAX_BALLS, integer=True),
+    "auto_plunger": partial(record, AutoPlunger, parsers=AUTO_PLUNGER_FIELDS),
+}
+
+
 def parse_elements(
     raw: Mapping[str, Any], top: Where, point: Parser, materials: tuple[Material, ...]
 ) -> dict[str, tuple[Any, ...]]:
-    """The walls, posts, flippers and sensors, by group name (the Table's fields), checked
-    together: unique names, known materials, no flipper pivot in a wall."""
+    """The walls, posts, flippers and sensors, the targets and the saucers and locks, by group
+    name (the Table's fields), checked together: unique names, known materials, no flipper pivot
+    in a wall. (The places of held balls need the ball's radius: ``geometry.check_held``.)"""
     post = partial(record, Post, parsers=bound(POST_FIELDS, point))
     elements = {
         "walls": _group(raw, top, "walls", partial(_wall, point=point), MAX_SEGMENTS),
@@ -192,6 +240,7 @@ def parse_elements(
         "sensors": _group(raw, top, "sensors", partial(_sensor, point=point), MAX_SENSORS),
     }
     elements.update(_target_groups(raw, top, point))
+    elements.update(_multiball_groups(raw, top, point))
     n_segments = sum(len(wall.segments()) for wall in elements["walls"])
     n_segments += len(elements["standup_targets"])
     if n_segments > MAX_SEGMENTS:
@@ -325,12 +374,18 @@ def _check_kickers(
 
 def _kickback(value: object, loc: Where, point: Parser) -> Kickback:
     kickback = record(Kickback, value, loc, bound(KICKBACK_FIELDS, point))
-    if not 0.0 < math.hypot(*kickback.kick) <= MAX_KICKBACK_SPEED:
-        loc.key("kick").fail(
-            f"kick speed {math.hypot(*kickback.kick):g} m/s must be in (0, {MAX_KICKBACK_SPEED:g}] "
-            "(a real kickback fires the ball at a few m/s)"
-        )
+    _check_kick(
+        kickback.kick, loc.key("kick"), MAX_KICKBACK_SPEED, "a real kickback fires the ball"
+    )
     return kickback
+
+
+def _check_kick(kick: tuple[float, float], loc: Where, most: float, real: str) -> None:
+    """A kick's speed is in (0, ``most``] (``real``: how a real one kicks, for the message)."""
+    if not 0.0 < math.hypot(*kick) <= most:
+        loc.fail(
+            f"kick speed {math.hypot(*kick):g} m/s must be in (0, {most:g}] ({real} at a few m/s)"
+        )
 
 
 def _target_groups(raw: Mapping[str, Any], top: Where, point: Parser) -> dict[str, tuple[Any, ...]]:
@@ -348,3 +403,51 @@ def _target_groups(raw: Mapping[str, Any], top: Where, point: Parser) -> dict[st
     if n_targets > MAX_DROP_TARGETS:
         top.key("drop_targets").fail(f"{n_targets} targets in all, at most {MAX_DROP_TARGETS}")
     return groups
+
+
+# --- multiball -----------------------------------------------------------------------------------
+
+
+def _multiball_groups(
+    raw: Mapping[str, Any], top: Where, point: Parser
+) -> dict[str, tuple[Any, ...]]:
+    """The saucers and locks, by group name."""
+    saucer = partial(record, Saucer, parsers=bound(SAUCER_FIELDS, point))
+    lock = partial(record, Lock, parsers=bound(LOCK_FIELDS, point))
+    return {
+        "saucers": _group(raw, top, "saucers", saucer, MAX_SAUCERS),
+        "locks": _group(raw, top, "locks", lock, MAX_LOCKS),
+    }
+
+
+def parse_trough(
+    value: object,
+    loc: Where,
+    plunger: Plunger | None,
+    ball_material: str | None,
+    ball_loc: Where,
+) -> Trough:
+    """The ``trough``: several balls need a plunger to serve them and a ball-ball material
+    (``ball.material``); the auto-plunger launches from the plunger's position."""
+    trough = record(Trough, value, loc, TROUGH_FIELDS)
+    auto = trough.auto_plunger
+    if auto is not None and auto.speed[0] > auto.speed[1]:
+        low, high = auto.speed
+        loc.key("auto_plunger").key("speed").fail(
+            f"expected [min, max] with min <= max, got [{low:g}, {high:g}]"
+        )
+    if auto is not None and plunger is None:
+        loc.key("auto_plunger").fail(
+            "an auto-plunger launches from the plunger's position: the table needs a plunger"
+        )
+    if trough.balls > 1 and plunger is None:
+        loc.key("balls").fail(
+            f"{trough.balls} balls need a plunger (the player's or the machine's) to serve them "
+            "from the shooter lane: the table has none"
+        )
+    if trough.balls > 1 and ball_material is None:
+        ball_loc.key("material").fail(
+            f"a trough of {trough.balls} balls needs the ball-ball material (ball.material, "
+            "one of the materials): balls in play together hit one another"
+        )
+    return trough

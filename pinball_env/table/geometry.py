@@ -1,8 +1,9 @@
 """The table's geometry checks: what ties the elements' places together (no zero-length segment,
 a ball's start and the plunger clear of every element and inside the outline, a two-sided
 outline, no flipper pivot in a wall, nothing in a flipper's swing, a launch path that one-sided
-walls let through), and :func:`check_ball_state`, the same checks on a ball state given at run
-time.
+walls let through, the places where saucers and locks hold balls clear of all that and of one
+another: :func:`check_held`), and :func:`check_ball_state`, the same checks on a ball state given
+at run time.
 
 The swing check runs on a numba kernel (:func:`_swing_clearance`), bounded in work by
 ``SWING_SAMPLES``.
@@ -46,6 +47,47 @@ def check_placed(
     walls = solid_walls(elements)
     _check_clear(center, radius, walls, elements["posts"], elements["flippers"], loc)
     _check_enclosed(center, elements["walls"], loc)
+
+
+def check_held(
+    places: Iterable[tuple[Where, tuple[float, float]]],
+    radius: float,
+    elements: Mapping[str, tuple[Any, ...]],
+    plunger: Plunger | None,
+) -> None:
+    """The places where balls of ``radius`` are held (saucer centres, lock slots, each with its
+    path) are each clear of every element, inside the outline and out of every flipper's swing
+    (a held ball is immovable: a rising flipper would push into it), and at least a ball's
+    diameter from one another and from the plunger's position (balls wait there while others
+    are held)."""
+    places = list(places)
+    if not places:
+        return
+    for loc, center in places:
+        check_placed(center, radius, elements, loc)
+    for i, (loc, center) in enumerate(places):
+        others = places[:i]
+        if plunger is not None:
+            others.append((Where(loc.source, "plunger.position"), plunger.position))
+        for other, c in others:
+            gap = math.dist(center, c)
+            if gap < 2.0 * radius:
+                loc.fail(
+                    f"a ball held at ({center[0]:g}, {center[1]:g}) overlaps one at {other.path} "
+                    f"(centres {gap:g} apart < the ball's diameter {2.0 * radius:g})"
+                )
+    circles = np.array([(*c, radius) for _, c in places], dtype=np.float64).reshape(-1, 3)
+    for flipper in elements["flippers"]:
+        gap, k = _swing_clearance(
+            *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
+            math.radians(flipper.rest_angle), math.radians(flipper.up_angle),
+            np.zeros((0, 4)), circles, SWING_CLEARANCE / 2.0, SWING_SAMPLES,
+        )  # fmt: skip
+        if gap < SWING_CLEARANCE:
+            places[k][0].fail(
+                f"a ball held here lies in flipper {short(flipper.name)}'s swing (or too close "
+                "to be sure it does not): a rising flipper would push into an immovable ball"
+            )
 
 
 def check_outline(walls: tuple[Wall, ...], top: Where) -> None:

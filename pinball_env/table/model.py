@@ -9,6 +9,12 @@ its origin at the bottom-left corner, x to the right and y up the table.
 :meth:`Table.pack_settings` into its :class:`~pinball_env.physics.Settings`. Element ids follow
 the kernel's order (segments, circles, flippers, sensors): :attr:`Table.element_names` and
 :attr:`Table.element_scores` are indexed by them.
+
+The multiball elements (:class:`Saucer`, :class:`Lock`, :class:`Trough`, and the ball-ball
+``Ball.material``) are not in :meth:`Table.pack`: ``sim.World`` plays them (the trough's number
+of balls, saucers and locks capture balls at the end of a frame), with the ball-ball material
+packed by :meth:`Table.pack_ball_pair`. Saucers, then locks, have element ids after every
+packed element (after the kickbacks), so no id of a table without them moves.
 """
 
 from __future__ import annotations
@@ -240,6 +246,60 @@ class Kickback(_Line):
 
 
 @dataclass(frozen=True)
+class Saucer:
+    """A kickout hole: a ball whose centre comes within ``radius`` of ``center`` slower than
+    ``capture_speed`` is captured (held at ``center``, immovable), scores, and after
+    ``hold_time`` leaves at ``kick``. Played by ``sim.World`` (an element id after the
+    kickbacks; :meth:`Table.pack` leaves it out)."""
+
+    name: str
+    center: tuple[float, float]  # where a captured ball rests [m]
+    kick: tuple[float, float]  # the velocity the ball leaves with [m/s]
+    radius: float = 0.02  # capture radius about the centre [m]
+    capture_speed: float = 0.5  # a slower ball within the radius is captured [m/s]
+    hold_time: float = 1.0  # how long it holds the ball [s]
+    score: int = 0  # points per capture [-]
+
+
+@dataclass(frozen=True)
+class Lock:
+    """A ball lock: a ball whose centre comes within ``radius`` of the next free slot slower
+    than ``capture_speed`` is held there (immovable) until a rule releases the lock's balls,
+    which leave their slots at ``kick``. Played by ``sim.World`` (an element id after the
+    saucers; :meth:`Table.pack` leaves it out)."""
+
+    name: str
+    slots: tuple[tuple[float, float], ...]  # where held balls rest, in fill order [m]
+    kick: tuple[float, float]  # the velocity a released ball leaves with [m/s]
+    radius: float | None = None  # capture radius about the next free slot; None: the ball's [m]
+    capture_speed: float = 1.0  # a slower ball within the radius is held [m/s]
+    score: int = 0  # points per ball locked [-]
+
+    def capture_radius(self, ball_radius: float) -> float:
+        """The capture radius [m]: ``radius``, or the ball's where none is set."""
+        return ball_radius if self.radius is None else self.radius
+
+
+@dataclass(frozen=True)
+class AutoPlunger:
+    """The machine's plunger that launches the extra balls of a multiball from the plunger's
+    position, straight up the table."""
+
+    speed: tuple[float, float]  # launch speed range (min, max) [m/s]
+
+
+@dataclass(frozen=True)
+class Trough:
+    """The balls the machine holds (those not in play wait in the trough and are fed to the
+    shooter lane), and the auto-plunger that launches extra balls in a multiball. ``sim.World``
+    holds ``balls`` ball slots per env; ``game.multiball`` serves them (a ball drains back to
+    the trough; the auto-plunger launches ``add_balls``)."""
+
+    balls: int = 1  # balls in the machine [-]
+    auto_plunger: AutoPlunger | None = None
+
+
+@dataclass(frozen=True)
 class BallSave:
     """A ball that drains within ``time`` of leaving the plunger is served again, once per
     ball, without losing it."""
@@ -334,6 +394,9 @@ class Ball:
     mass: float
     start: tuple[float, float]
     velocity: tuple[float, float] = (0.0, 0.0)
+    # Of a ball's contact with another ball (needed where the trough holds several); None: a
+    # table of one ball in play has no ball-ball contact [-].
+    material: str | None = None
 
 
 @dataclass(frozen=True)
@@ -374,6 +437,11 @@ class Table:
     gravity: float = 9.81  # [m/s^2]
     simulation: Simulation = Simulation()  # frozen, so sharing it is safe
     source: str = "<dict>"  # file the table was read from
+    # Multiball (see ``Saucer``, ``Lock``, ``Trough``): played by ``sim.World``, not packed in
+    # ``pack``. Last, so that a Table built by position keeps its meaning.
+    saucers: tuple[Saucer, ...] = ()
+    locks: tuple[Lock, ...] = ()
+    trough: Trough | None = None  # None: one ball, as a trough of 1
 
     @cached
     def free_space(self) -> np.ndarray:
@@ -433,7 +501,8 @@ class Table:
     @cached
     def element_names(self) -> tuple[str, ...]:
         """Name of every element by global id: segments (``"wall[i]"``, then the stand-up
-        targets), circles, flippers, sensors, drop targets, spinners and kickbacks."""
+        targets), circles, flippers, sensors, drop targets, spinners and kickbacks, then the
+        saucers and locks (not packed: ``sim.World`` counts their captures)."""
         segments = [f"{wall.name}[{i}]" for wall in self.walls for i in range(len(wall.segments()))]
         return (*segments, *(e.name for e in self._named_elements))
 
@@ -449,7 +518,7 @@ class Table:
         """The elements after the walls' segments, in id order."""
         return (
             *self.standup_targets, *self.posts, *self.flippers, *self.sensors,
-            *self.drop_target_list, *self.spinners, *self.kickbacks,
+            *self.drop_target_list, *self.spinners, *self.kickbacks, *self.saucers, *self.locks,
         )  # fmt: skip
 
     @property
@@ -549,6 +618,23 @@ class Table:
             skin=sim.skin,
             resting_speed=sim.resting_speed,
         )
+
+    @property
+    def n_balls(self) -> int:
+        """Ball slots per env: the trough's balls, 1 without a trough."""
+        return 1 if self.trough is None else self.trough.balls
+
+    def pack_ball_pair(self) -> np.ndarray:
+        """The ball-ball material as a surface properties row (columns ``PROP_*``; the kick
+        unused): ``ball.material``'s restitution and friction, 1 and 0 where it names none
+        (a table of one ball has no ball-ball contact). Writable, a fresh copy."""
+        row = np.zeros(columns.PROP_SIZE)
+        row[columns.PROP_RESTITUTION] = 1.0
+        if self.ball.material is not None:
+            material = self.material(self.ball.material)
+            row[columns.PROP_RESTITUTION] = material.restitution
+            row[columns.PROP_FRICTION] = material.friction
+        return row
 
     def _props(self, material: str, kick: float) -> list[float]:
         """A surface properties row (columns ``PROP_*``)."""

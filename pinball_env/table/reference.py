@@ -41,6 +41,7 @@ from pinball_env.table.rules_schema import (
     EFFECT_NUMBERS,
     MAX_RULES,
     RULE_FIELDS,
+    TRIGGER_FLAGS,
     WHEN_FIELDS,
     known_names,
 )
@@ -92,7 +93,11 @@ _BY_KEYWORDS: dict[Callable[..., Any], Callable[[dict[str, Any]], str]] = {
 # The mappings that the code of the rules parses key by key: their kind (or that of a list of
 # them, where they sit in one) and their defaults.
 _RULE_MAPPINGS: dict[int, tuple[str, Mapping[str, Any]]] = {
-    id(RULE_FIELDS): (f"list of up to {MAX_RULES} rules, each a mapping", {}),
+    id(RULE_FIELDS): (
+        f"list of up to {MAX_RULES} rules, each a mapping (`if_lit`: the name of a light; the "
+        "rule fires only while it is lit)",
+        {"if_lit": None},
+    ),
     id(WHEN_FIELDS): ("mapping of one trigger (see the rule keys), with `at` for a counter", {}),
     id(DO_FIELDS): (
         f"list of 1-{MAX_RULES} effects, each a mapping of one effect (see the rule keys), "
@@ -131,6 +136,13 @@ def schema_limits() -> list[str]:
         f"a flipper's swing |up_angle - rest_angle| is in (0, {e.MAX_SWING:g}] deg",
         "a flipper's |base_radius - tip_radius| < length",
         f"a kickback's kick speed is in (0, {e.MAX_KICKBACK_SPEED:g}] m/s",
+        "a saucer's centre and every lock slot (where balls are held) are inside the outline, "
+        "clear of every element by the ball's radius, out of every flipper's swing, and at least "
+        "a ball's diameter from one another and from the plunger's position",
+        "a lock's radius, where absent, is the ball's radius",
+        "a trough of more than one ball needs a plunger and ball.material (the ball-ball "
+        "material, one of the materials); an auto_plunger needs a plunger, its speed is "
+        "[min, max] with min <= max",
         "a plunger's speed and pull_speed are [min, max] with min <= max",
         "a player's plunger has stroke, pull_time and pull_speed together; scatter and "
         "skill_shot need it, and scatter < pull_speed's min",
@@ -208,7 +220,9 @@ def _count(keywords: Mapping[str, Any]) -> str:
 
 
 def _meaning(key: str, word: Keyword) -> str:
-    if word.names is None:
+    if word.names is None and key in TRIGGER_FLAGS:
+        takes = "true"
+    elif word.names is None:
         takes = _kind(EFFECT_NUMBERS[key])
     else:
         kind, many = word.names

@@ -8,13 +8,21 @@ A rule is ``when`` (one trigger) and ``do`` (effects, in order):
   a spinner's revolution, a kickback's line crossed), ``bank`` (a drop bank's last target
   falls), ``lights_on`` (the named lights become all lit), ``flipper`` (a flipper button,
   ``left``, ``right`` or ``any``, pressed), ``counter`` (a counter reaches ``at``; it then starts
-  again from 0) and ``timer_ends``;
+  again from 0), ``timer_ends``, and for multiball ``locked`` (a ball is locked in the named
+  lock), ``multiball_starts`` and ``multiball_ends`` (``true``: two or more balls came into
+  play, one is left);
 - effects: ``light``, ``unlight`` (lights), ``rotate`` (lights pass their states one place on,
   the last's to the first: a "lane change"), ``count`` (add ``by``, default 1, to a counter),
   ``start_timer`` (a timer runs for its ``time`` again; while it runs, the points of its
   ``elements`` are multiplied by its ``factor``), ``score`` (points now), ``bonus`` (points to
   the end-of-ball bonus), ``multiplier`` (raise the bonus multiplier, up to
-  ``max_multiplier``), ``light_kickback`` and ``extra_ball``.
+  ``max_multiplier``), ``light_kickback``, ``extra_ball``, and for multiball ``release_lock``
+  (the named lock lets its balls go), ``add_balls`` (the auto-plunger launches that many balls
+  from the trough) and ``ball_save`` (seconds: a ball of those in play that drains meanwhile is
+  launched again by the auto-plunger).
+
+A rule with ``if_lit: LIGHT`` fires only while that light is lit (a jackpot lit during a
+multiball: a ``multiball_starts`` rule lights it, a ``multiball_ends`` rule puts it out).
 
 At the end of each ball the bonus times the multiplier is scored (nothing on a tilt), and both
 start again (0 and x1); lights, counters and timers carry over to the next ball.
@@ -55,6 +63,11 @@ TRIGGER_KEYS: dict[str, Keyword] = {
     "counter": Keyword(
         ("counters", False), "the named counter reaches `at`; it then starts again from 0"
     ),
+    "locked": Keyword(("locks", False), "a ball is locked in the named lock"),
+    "multiball_starts": Keyword(
+        None, "a multiball starts: a second ball comes into play (balls held in locks are not)"
+    ),
+    "multiball_ends": Keyword(None, "a multiball ends: one ball is left in play"),
 }
 EFFECT_KEYS: dict[str, Keyword] = {
     "light": Keyword(("lights", True), "light the named lights"),
@@ -75,11 +88,23 @@ EFFECT_KEYS: dict[str, Keyword] = {
     "multiplier": Keyword(None, "raise the bonus multiplier by this much, up to max_multiplier"),
     "light_kickback": Keyword(("kickbacks", False), "light the named kickback"),
     "extra_ball": Keyword(None, "award this many extra balls"),
+    "release_lock": Keyword(("locks", False), "the named lock lets its balls go at its kick"),
+    "add_balls": Keyword(
+        None,
+        "the trough's auto-plunger launches this many more balls (as many as the trough holds), "
+        "one at a time as the shooter lane clears",
+    ),
+    "ball_save": Keyword(
+        None,
+        "a ball save of this many seconds for the balls in play: a ball that drains meanwhile is "
+        "launched again by the auto-plunger (a multiball's start)",
+    ),
 }
 TRIGGERS = tuple(TRIGGER_KEYS)
 EFFECTS = tuple(EFFECT_KEYS)
 # Triggers set off by the physics or the player, and those set off by other rules' effects.
-EVENT_TRIGGERS = ("hit", "bank", "flipper", "timer_ends")
+EVENT_TRIGGERS = ("hit", "bank", "flipper", "timer_ends", "locked", "multiball_starts",
+                  "multiball_ends")  # fmt: skip
 RULE_TRIGGERS = tuple(key for key in TRIGGERS if key not in EVENT_TRIGGERS)
 FLIPPER_BUTTONS = ("left", "right", "any")
 # What each trigger and effect names (see Keyword.names).
@@ -126,14 +151,17 @@ class Effect:
 
     kind: str
     names: tuple[str, ...] = ()
-    value: int = 0
+    value: float = 0  # an int but for ball_save's seconds
 
 
 @dataclass(frozen=True)
 class Rule:
+    """``do`` when ``when`` happens (only while light ``if_lit`` is lit, where it names one)."""
+
     name: str
     when: Trigger
     do: tuple[Effect, ...]
+    if_lit: str | None = None
 
 
 @dataclass(frozen=True)

@@ -88,8 +88,13 @@ EFFECT_NUMBERS = {
     "bonus": partial(number, low=1, high=MAX_SCORE, integer=True),
     "multiplier": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
     "extra_ball": partial(number, low=1, high=10, integer=True),
+    "add_balls": partial(number, low=1, high=10, integer=True),
+    "ball_save": partial(number, low=0.0, high=600.0, open_low=True, unit="s"),
 }
-RULE_FIELDS = {"name": string, "when": WHEN_FIELDS, "do": [DO_FIELDS]}
+# The triggers without names (rules.TRIGGER_KEYS): each takes ``true``.
+TRIGGER_FLAGS = ("multiball_starts", "multiball_ends")
+RULE_FIELDS = {"name": string, "when": WHEN_FIELDS, "do": [DO_FIELDS], "if_lit": string}
+RULE_OPTIONAL = ("if_lit",)
 RULES_FIELDS = {
     "lights": partial(records, Light, parsers=LIGHT_FIELDS, max_len=MAX_RULES),
     "counters": partial(name_list, max_len=MAX_RULES),
@@ -157,12 +162,18 @@ def _check_no_ring(rule_set: RuleSet, loc: Where) -> None:
 
 
 def _rule(value: object, loc: Where, known: Mapping[str, tuple[str, ...]]) -> Rule:
-    raw = mapping(value, loc, RULE_FIELDS)
+    required = [key for key in RULE_FIELDS if key not in RULE_OPTIONAL]
+    raw = mapping(value, loc, required, RULE_OPTIONAL)
     name = string(raw["name"], loc.key("name"))
     when = _trigger(raw["when"], loc.key("when"), known)
     effects = list_of(raw["do"], loc.key("do"), 1, MAX_RULES)
     do = tuple(_effect(item, loc.key("do").index(i), known) for i, item in enumerate(effects))
-    return Rule(name, when, do)
+    if_lit = None
+    if "if_lit" in raw:
+        if_lit = known_names(raw["if_lit"], loc.key("if_lit"), known["lights"], "light")[0]
+        if not isinstance(raw["if_lit"], str):
+            loc.key("if_lit").fail(f"expected the name of a light, got {describe(raw['if_lit'])}")
+    return Rule(name, when, do, if_lit)
 
 
 # What each trigger and effect names: the kind of name (a key of the known names) and whether a
@@ -170,7 +181,7 @@ def _rule(value: object, loc: Where, known: Mapping[str, tuple[str, ...]]) -> Ru
 
 _KIND_WORDS = {"elements": "element", "banks": "drop bank", "lights": "light",
                "buttons": "flipper button", "counters": "counter", "timers": "timer",
-               "kickbacks": "kickback"}  # fmt: skip
+               "kickbacks": "kickback", "locks": "lock"}  # fmt: skip
 
 
 def _one_key(value: object, loc: Where, kinds: tuple[str, ...], extra: tuple[str, ...]) -> str:
@@ -193,7 +204,12 @@ def _named(
 
 def _trigger(value: object, loc: Where, known: Mapping[str, Any]) -> Trigger:
     kind = _one_key(value, loc, TRIGGERS, tuple(WHEN_FIELDS))
-    names = _named(value[kind], loc.key(kind), TRIGGER_NAMES[kind], known)
+    if TRIGGER_NAMES[kind] is None:  # TRIGGER_FLAGS
+        if value[kind] is not True:
+            loc.key(kind).fail(f"expected true, got {describe(value[kind])}")
+        names: tuple[str, ...] = ()
+    else:
+        names = _named(value[kind], loc.key(kind), TRIGGER_NAMES[kind], known)
     if ("at" in value) != (kind == "counter"):
         loc.fail("'at' goes with a counter trigger, and a counter trigger needs it")
     at = WHEN_FIELDS["at"](value["at"], loc.key("at")) if kind == "counter" else 0
@@ -222,6 +238,8 @@ _NAMED_GROUPS = (
     "sensors",
     "spinners",
     "kickbacks",
+    "saucers",
+    "locks",
 )
 
 
@@ -234,5 +252,6 @@ def rule_names(table_elements: Mapping[str, tuple[Any, ...]]) -> dict[str, tuple
         "elements": tuple(elements),
         "banks": tuple(bank.name for bank in groups.get("drop_targets", ())),
         "kickbacks": tuple(k.name for k in groups.get("kickbacks", ())),
+        "locks": tuple(lock.name for lock in groups.get("locks", ())),
         "buttons": FLIPPER_BUTTONS,
     }

@@ -1,5 +1,7 @@
 """The table schema: the top level of a table description (its keys, the playfield, the ball, the
-optional sections), parsed part by part into a frozen :class:`~pinball_env.table.model.Table`.
+optional sections, among them the multiball ones: ``saucers``, ``locks``, ``trough`` and the
+ball-ball ``ball.material``), parsed part by part into a frozen
+:class:`~pinball_env.table.model.Table`.
 
 :func:`table_from_dict` validates a description (as read from YAML); every mistake (unknown or
 missing key, wrong type, non-finite or out-of-range number, bad geometry) raises
@@ -26,13 +28,19 @@ from pinball_env.table.cabinet import (
     parse_cabinet,
     parse_tilt,
 )
-from pinball_env.table.elements import parse_elements, parse_materials, parse_plunger
+from pinball_env.table.elements import (
+    parse_elements,
+    parse_materials,
+    parse_plunger,
+    parse_trough,
+)
 from pinball_env.table.fields import (
     POINT,
     Parser,
     Where,
     bound,
     in_playfield,
+    listing,
     mapping,
     number,
     record,
@@ -41,7 +49,7 @@ from pinball_env.table.fields import (
     string,
     velocity_pair,
 )
-from pinball_env.table.geometry import check_launch_path, check_placed
+from pinball_env.table.geometry import check_held, check_launch_path, check_placed
 from pinball_env.table.model import (
     Ball,
     BallSave,
@@ -49,15 +57,18 @@ from pinball_env.table.model import (
     DropBank,
     Flipper,
     Kickback,
+    Lock,
     Material,
     Plunger,
     Post,
+    Saucer,
     Sensor,
     Simulation,
     Spinner,
     StandupTarget,
     Table,
     Tilt,
+    Trough,
     Wall,
 )
 from pinball_env.table.rules import RuleSet
@@ -71,6 +82,7 @@ BALL_FIELDS = {
     "mass": partial(number, low=0.001, high=10.0, unit="kg"),  # a real ball is 80 g
     "start": POINT,
     "velocity": velocity_pair,
+    "material": string,  # of ball-ball contact: needed by a trough of several balls
 }
 SIMULATION_FIELDS = {
     "frame_rate": partial(number, low=1.0, high=1000.0, unit="1/s"),
@@ -109,6 +121,9 @@ TABLE_FIELDS: dict[str, Any] = {
     "drop_targets": _elements(DropBank, el.DROP_BANK_FIELDS, el.MAX_DROP_TARGETS),
     "spinners": _elements(Spinner, el.SPINNER_FIELDS, el.MAX_SPINNERS),
     "kickbacks": _elements(Kickback, el.KICKBACK_FIELDS, el.MAX_KICKBACKS),
+    "saucers": _elements(Saucer, el.SAUCER_FIELDS, el.MAX_SAUCERS),
+    "locks": _elements(Lock, el.LOCK_FIELDS, el.MAX_LOCKS),
+    "trough": partial(record, Trough, parsers=el.TROUGH_FIELDS),
     "ball_save": partial(record, BallSave, parsers=BALL_SAVE_FIELDS),
     "rules": partial(record, RuleSet, parsers=RULES_FIELDS),
     "simulation": partial(record, Simulation, parsers=SIMULATION_FIELDS),
@@ -129,6 +144,11 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     ball_loc = top.key("ball")
     ball = record(Ball, raw["ball"], ball_loc, bound(BALL_FIELDS, point))
     check_placed(ball.start, ball.radius, elements, ball_loc.key("start"))
+    known = [m.name for m in materials]
+    if ball.material is not None and ball.material not in known:
+        ball_loc.key("material").fail(
+            f"unknown material {short(ball.material)} (known: {listing(known)})"
+        )
     return Table(
         name=string(raw["name"], top.key("name")),
         width=width,
@@ -155,6 +175,15 @@ def _sections(
         position_loc = top.key("plunger").key("position")
         check_placed(plunger.position, ball.radius, elements, position_loc)
         check_launch_path(plunger, elements["walls"], top)
+    if "trough" in raw:
+        sections["trough"] = parse_trough(
+            raw["trough"],
+            top.key("trough"),
+            sections.get("plunger"),
+            ball.material,
+            top.key("ball"),
+        )
+    check_held(_held_places(elements, top), ball.radius, elements, sections.get("plunger"))
     if "slope_deg" in raw:
         sections["slope_deg"] = TABLE_FIELDS["slope_deg"](raw["slope_deg"], top.key("slope_deg"))
     if "gravity" in raw:
@@ -177,4 +206,32 @@ def _sections(
         sections["ball_save"] = TABLE_FIELDS["ball_save"](raw["ball_save"], top.key("ball_save"))
     if "rules" in raw:
         sections["rules"] = parse_rules(raw["rules"], top.key("rules"), point, rule_names(elements))
+        _check_multiball_rules(sections["rules"], sections.get("trough"), top.key("rules"))
     return sections
+
+
+def _check_multiball_rules(rules: Any, trough: Any, loc: Where) -> None:
+    """The multiball effects need the machine's balls: ``add_balls`` and ``ball_save`` a trough
+    of several balls with an auto_plunger."""
+    for i, rule in enumerate(rules.rules):
+        for j, effect in enumerate(rule.do):
+            if effect.kind in ("add_balls", "ball_save") and (
+                trough is None or trough.balls < 2 or trough.auto_plunger is None
+            ):
+                where = loc.key("rules").index(i, rule.name).key("do").index(j).key(effect.kind)
+                where.fail("needs a trough of several balls with an auto_plunger")
+
+
+def _held_places(
+    elements: Mapping[str, tuple[Any, ...]], top: Where
+) -> list[tuple[Where, tuple[float, float]]]:
+    """Where the saucers and locks hold balls, each with its path (``saucers[0] 'x'.center``,
+    ``locks[0] 'y'.slots[1]``)."""
+    places = [
+        (top.key("saucers").index(i, saucer.name).key("center"), saucer.center)
+        for i, saucer in enumerate(elements["saucers"])
+    ]
+    for i, lock in enumerate(elements["locks"]):
+        slots = top.key("locks").index(i, lock.name).key("slots")
+        places += [(slots.index(j), slot) for j, slot in enumerate(lock.slots)]
+    return places

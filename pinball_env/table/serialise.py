@@ -1,6 +1,8 @@
 """A table written back as a description: :func:`table_to_dict` gives the plain lists and dicts
 that :func:`~pinball_env.table.schema.table_from_dict` reads back as the same table (the YAML
-files are ``files.dump_table``'s)."""
+files are ``files.dump_table``'s). Optional sections (targets, rules, the multiball saucers,
+locks, trough and ``ball.material``) are written only where a table has them, so that an older
+table writes, and digests, as it always did."""
 
 from __future__ import annotations
 
@@ -24,15 +26,23 @@ def table_to_dict(table: Table) -> dict[str, Any]:
         "playfield": {"width": table.width, "height": table.height},
         "slope_deg": table.slope_deg,
         "gravity": table.gravity,
-        "ball": plain(table.ball),
+        # The ball-ball material only where set (a table of one ball writes as it did).
+        "ball": plain(table.ball, drop=() if table.ball.material else ("material",)),
         "materials": {m.name: plain(m, drop=("name",)) for m in table.materials},
     }
     for group in ("walls", "posts", "flippers", "sensors"):
         data[group] = [plain(element) for element in getattr(table, group)]
     # Targets and rules only where the table has them (older tables write as they did).
-    for group in ("standup_targets", "drop_targets", "spinners", "kickbacks"):
+    for group in ("standup_targets", "drop_targets", "spinners", "kickbacks", "saucers"):
         if getattr(table, group):
             data[group] = [plain(element) for element in getattr(table, group)]
+    if table.locks:  # a lock's radius only where set (absent: the ball's)
+        data["locks"] = [
+            plain(lock, drop=("radius",) * (lock.radius is None)) for lock in table.locks
+        ]
+    if table.trough is not None:
+        auto = table.trough.auto_plunger is None
+        data["trough"] = plain(table.trough, drop=("auto_plunger",) * auto)
     if table.ball_save is not None:
         data["ball_save"] = plain(table.ball_save)
     if table.rules is not None:
@@ -70,7 +80,8 @@ def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
         return list(values) if spec[1] else values[0]
 
     def trigger(when: Trigger) -> dict[str, Any]:
-        out = {when.kind: names(TRIGGER_NAMES[when.kind], when.names)}
+        spec = TRIGGER_NAMES[when.kind]
+        out = {when.kind: True if spec is None else names(spec, when.names)}
         return {**out, "at": when.at} if when.kind == "counter" else out
 
     def effect(do: Effect) -> dict[str, Any]:
@@ -89,7 +100,12 @@ def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
         ],
         "max_multiplier": rules.max_multiplier,
         "rules": [
-            {"name": r.name, "when": trigger(r.when), "do": [effect(e) for e in r.do]}
+            {
+                "name": r.name,
+                "when": trigger(r.when),
+                "do": [effect(e) for e in r.do],
+                **({} if r.if_lit is None else {"if_lit": r.if_lit}),
+            }
             for r in rules.rules
         ],
     }

@@ -11,6 +11,8 @@ CASES = [
     ("Pinball-v0", {}),
     ("Pinball-v1", {}),
     ("Pinball-v2", {}),
+    ("Pinball-v3", {}),
+    ("Pinball-v3", {"rays": 4}),
     ("PinballProcgen-v0", {"rays": 8}),
     ("Pinball-v0", {"rays": 5}),
 ]

@@ -49,3 +49,35 @@ def test_pure_python_world_step_is_bitwise_the_compiled_one(tmp_path):
     for _ in range(240):
         world.step()
     np.testing.assert_array_equal(np.load(out), world.balls)
+
+
+DROP_TARGET_SCRIPT = """
+import sys
+import numpy as np
+from pinball_env.table import load_table
+from pinball_env.sim.world import World
+world = World(load_table("classic_v1"), n_envs=2)
+world.place_ball(1, (0.30, 0.765), (2.0, 0.0))  # at drop_1, from the left
+hits = 0
+for _ in range(30):
+    world.step()
+    hits += int(world.state.hits[1].sum())
+np.save(sys.argv[1], np.append(world.balls.ravel(), hits))
+"""
+
+
+def test_a_drop_target_contact_plays_as_plain_python_as_compiled(tmp_path):
+    # A drop target's element id comes after the flippers': its contact once read a flipper row
+    # past the end (an IndexError as plain Python, another env's memory compiled).
+    out = tmp_path / "trace.npy"
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    subprocess.run([sys.executable, "-c", DROP_TARGET_SCRIPT, str(out)], cwd=ROOT, env=env,
+                   check=True, timeout=600)  # fmt: skip
+    world = World(load_table("classic_v1"), n_envs=2)
+    world.place_ball(1, (0.30, 0.765), (2.0, 0.0))
+    hits = 0
+    for _ in range(30):
+        world.step()
+        hits += int(world.state.hits[1].sum())
+    assert hits >= 1 and not world.state.targets_up[1].all()  # drop_1 was hit and fell
+    np.testing.assert_array_equal(np.load(out), np.append(world.balls.ravel(), hits))

@@ -74,10 +74,9 @@ def test_box_loads() -> None:
 
 def test_load_by_name() -> None:
     assert load_table("box") == load_table(BOX)
-    assert available_tables() == ["classic", "classic_v1", "classic_v2"] and available_tables(
-        "test"
-    ) == ["box"]
-    assert available_tables("all") == ["box", "classic", "classic_v1", "classic_v2"]
+    assert available_tables() == ["classic", "classic_v1", "classic_v2", "classic_v3"]
+    assert available_tables("test") == ["box"]
+    assert available_tables("all") == ["box", "classic", "classic_v1", "classic_v2", "classic_v3"]
 
 
 def test_packed_arrays() -> None:
@@ -873,8 +872,8 @@ def test_from_dict_names_dict_source() -> None:
 def test_unknown_name_lists_available_tables() -> None:
     with pytest.raises(
         TableError,
-        match=r"unknown table 'no_such_table' \(available: classic, classic_v1, classic_v2; "
-        r"test rigs: box\)",
+        match=r"unknown table 'no_such_table' \(available: classic, classic_v1, classic_v2, "
+        r"classic_v3; test rigs: box\)",
     ):
         load_table("no_such_table")
 
@@ -917,12 +916,12 @@ def test_built_in_tables_live_in_the_package() -> None:
     folder = builtin_tables_dir()
     assert folder.parent.name == "table" and folder.parent.parent.name == "pinball_env"
     assert sorted(p.name for p in folder.glob("*.yaml")) == [
-        "box.yaml", "classic.yaml", "classic_v1.yaml", "classic_v2.yaml"
+        "box.yaml", "classic.yaml", "classic_v1.yaml", "classic_v2.yaml", "classic_v3.yaml"
     ]  # fmt: skip
     with pytest.raises(
         TableError,
-        match=r"unknown table 'nope' \(available: classic, classic_v1, classic_v2; test rigs: "
-        r"box\)",
+        match=r"unknown table 'nope' \(available: classic, classic_v1, classic_v2, classic_v3; "
+        r"test rigs: box\)",
     ):
         load_table("nope")
 

@@ -62,7 +62,8 @@ def test_report_is_written(tmp_path):
     assert saved["free_run"]["frames"] == 60
     # Every finding is a verdict computed from the rows, and none is a disagreement.
     findings = saved["summary"]["findings"]
-    assert len(findings) == 11 and not any("DISAGREE" in finding for finding in findings)
+    assert len(findings) == 13 and not any("DISAGREE" in finding for finding in findings)
+    assert len(saved["ball_ball"]) == 12 and "two_balls_cradled" in saved
     assert (tmp_path / "crosscheck.png").stat().st_size > 10_000
 
 
@@ -138,3 +139,34 @@ def test_drop_targets_and_spinners_agree_with_pymunk():
     assert turns[0]["swept"] < turns[1]["swept"]
     for row in turns:
         assert abs(row["swept"] - row["pymunk"]) <= 1
+
+
+def test_ball_ball_shots_agree_with_the_analytic_answer():
+    """Head-on, onto a resting ball and oblique, restitution 1 and 0.5: ours exact (momentum,
+    and energy at e = 1, to rounding), pymunk within the stated tolerances."""
+    rows = cc.ball_ball_hits()
+    assert {row["shot"] for row in rows} == set(cc.PAIR_SHOTS) and len(rows) == 12
+    for row in rows:
+        for engine in cc.ENGINES:
+            assert cc.pair_agrees(row, engine), (row, engine)
+        assert row["swept"]["velocity_error"] < 1e-9
+        assert row["swept"]["momentum_error"] < 1e-12
+        assert abs(row["swept"]["contact_time_error"]) < 1e-5  # the skin, at the speed apart
+        if row["restitution"] == 1.0:
+            before = (
+                row["relative_speed"] ** 2 if row["shot"] != "head-on" else 2 * row["speed"] ** 2
+            )
+            after = np.square(row["swept"]["velocities"]).sum()
+            assert after == pytest.approx(before, abs=1e-12)
+        if row["angle"] == 0.0:  # head-on: pymunk's impulse is the same, only late
+            assert row["pymunk"]["velocity_error"] < 1e-9
+
+
+def test_two_balls_rest_together_on_a_raised_flipper_without_overlap():
+    result = cc.two_balls_cradled()
+    g_h = 9.81 * 0.11320321376790671 * cc.SUBSTEP
+    for engine in cc.ENGINES:
+        assert all(result[engine]["in_play"]) and max(result[engine]["speeds"]) < g_h
+    assert result["swept"]["least_gap"] >= 0.0 and result["swept"]["gap"] <= 2e-6
+    assert result["pymunk"]["least_gap"] >= -1e-4  # pymunk's collision slop
+    assert result["apart"] < 1e-4

@@ -30,6 +30,15 @@ instead of the swept kernel: one ``pymunk.Space`` per env, built from the same v
   velocity), and the frame ends with the kernel's ``update_targets`` (spinners turn, banks
   rise).
 
+Several balls (a table whose trough holds several, see ``World.n_balls``): each ball slot is a
+dynamic circle of its own, and pymunk collides the balls itself (it finds their overlaps after
+they happen, as with every other contact), at the ball-ball material's restitution and friction
+(``table.pack_ball_pair``: set on each ball-ball arbiter, since pymunk would multiply the balls'
+own values); a held ball (``World.ball_held``: a saucer, a lock) is a kinematic body at rest,
+immovable to the others, and dynamic again when released. The sensors, kickbacks and the drain
+are crossed by each ball's own move; banks rise when no ball in play is near them. The saucers
+and locks themselves are ``World``'s (the end of each frame, either backend).
+
 What pymunk does not have, and the cross-check measures: continuous collision (it finds overlaps
 after they happen, so a fast ball can pass through a thin wall or a flipper within one substep),
 and the inelastic resting-contact threshold (it relies on its slop and bias instead).
@@ -60,7 +69,8 @@ from pinball_env.physics.columns import (
     PROP_KICK,
     PROP_RESTITUTION,
 )
-from pinball_env.physics.data import first_drop_target, first_kickback, log_contact
+from pinball_env.physics.data import first_drop_target, first_kickback, first_spinner, log_contact
+from pinball_env.physics.multiball import raise_banks_multi
 from pinball_env.physics.step import flipper_end, flipper_motion, is_hit
 from pinball_env.physics.targets import (
     count_kickbacks,
@@ -68,6 +78,7 @@ from pinball_env.physics.targets import (
     record_crossings,
     sensor_crossing,
     spin_spinner,
+    turn_spinner,
     update_targets,
 )
 from pinball_env.sim.world import World
@@ -95,7 +106,7 @@ class PymunkWorld(World):
         for env, env_space in enumerate(self._spaces):
             if envs is None or envs[env]:
                 env_space.advance_frame()
-        return int((~np.isfinite(self.state.balls).all(axis=1)).sum())
+        return int((~np.isfinite(self.ball_states).all(axis=(1, 2))).sum())
 
     def __getstate__(self) -> dict[str, Any]:
         # Spaces hold callbacks into this object; they are rebuilt from the state arrays.
@@ -104,7 +115,7 @@ class PymunkWorld(World):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+        super().__setstate__(state)
         self._spaces = [_EnvSpace(self, env) for env in range(self.n_envs)]
 
 
@@ -121,7 +132,7 @@ class _EnvSpace:
         space.iterations = SOLVER_ITERATIONS
         self.space = space
         self.time = 0.0  # seconds since the start of the frame, for the contact log
-        self.pending_kicks: list[tuple[float, float, float]] = []
+        self.pending_kicks: list[tuple[Any, float, float, float]] = []
         self.kick_scale = 1.0  # 0 while the machine is tilted (its kickers dead)
         self.pending_drops: list[int] = []  # drop targets hit in the substep under way
 
@@ -151,13 +162,27 @@ class _EnvSpace:
 
         mass = table.ball.mass
         radius = table.ball.radius
-        self.ball = pymunk.Body(mass, 0.4 * mass * radius * radius)  # solid sphere
-        self.ball_shape = pymunk.Circle(self.ball, radius)
-        self.ball_shape.elasticity = 1.0  # pymunk multiplies: the surface's value is the result
-        self.ball_shape.friction = 1.0
-        self.ball_shape.collision_type = BALL_COLLISION_TYPE
-        self.ball_in_space = False
+        self.mass, self.moment = mass, 0.4 * mass * radius * radius  # a solid sphere
+        self.balls: list[pymunk.Body] = []
+        self.ball_shapes: list[pymunk.Circle] = []
+        for i in range(world.n_balls):
+            body = pymunk.Body(self.mass, self.moment)
+            shape = pymunk.Circle(body, radius)
+            shape.elasticity = 1.0  # pymunk multiplies: the surface's value is the result
+            shape.friction = 1.0
+            shape.collision_type = BALL_COLLISION_TYPE
+            shape.ball = i
+            self.balls.append(body)
+            self.ball_shapes.append(shape)
+        self.in_space = [False] * world.n_balls
+        pair = table.pack_ball_pair()
+        self.pair = float(pair[PROP_RESTITUTION]), float(pair[PROP_FRICTION])
         space.on_collision(BALL_COLLISION_TYPE, None, begin=self._begin, pre_solve=self._pre_solve)
+
+    # The first ball's (the state's ``ball`` slot 0), for code written for one ball.
+    @property
+    def ball(self) -> "pymunk.Body":
+        return self.balls[0]
 
     def _add_element(self, shape: "pymunk.Shape", element: int, props: np.ndarray) -> None:
         shape.elasticity = float(props[PROP_RESTITUTION])
@@ -176,27 +201,40 @@ class _EnvSpace:
         nx, ny = arbiter.normal  # from the first shape (the ball) to the second
         return other, -nx, -ny
 
+    def _pair(self, arbiter: "pymunk.Arbiter") -> bool:
+        """Whether the contact is between two balls; if so it takes the ball-ball material."""
+        if getattr(arbiter.shapes[1], "ball", None) is None:
+            return False
+        arbiter.restitution, arbiter.friction = self.pair
+        return True
+
     def _pre_solve(self, arbiter: "pymunk.Arbiter", space: "pymunk.Space", data: Any) -> None:
+        if self._pair(arbiter):
+            return
         other, _, _ = self._other(arbiter)
+        ball = arbiter.shapes[0].body
         if other.drop_target >= 0 and not self.world.state.targets_up[self.env, other.drop_target]:
             arbiter.process_collision = False  # fallen: no contact
         elif other.one_sided:
             # Behind a one-sided segment (the side its normal does not point to): pass through.
-            cx, cy = self.ball.position
+            cx, cy = ball.position
             ax, ay = other.anchor
             if (cx - ax) * other.blocking_normal[0] + (cy - ay) * other.blocking_normal[1] < 0.0:
                 arbiter.process_collision = False
 
     def _begin(self, arbiter: "pymunk.Arbiter", space: "pymunk.Space", data: Any) -> None:
+        if self._pair(arbiter):
+            return  # ball-ball contacts are not logged (no element id), as in the kernel
         other, nx, ny = self._other(arbiter)
+        ball = arbiter.shapes[0].body
         if other.one_sided or other.drop_target >= 0:
             self._pre_solve(arbiter, space, data)
             if not arbiter.process_collision:
                 return
         points = arbiter.contact_point_set.points
-        contact = points[0].point_a if points else self.ball.position
+        contact = points[0].point_a if points else ball.position
         surface = other.body.velocity_at_world_point(contact)
-        vx, vy = self.ball.velocity
+        vx, vy = ball.velocity
         speed = max(-((vx - surface.x) * nx + (vy - surface.y) * ny), 0.0)
         state = self.world.state
         kick = self.kick_scale * other.kick
@@ -206,7 +244,7 @@ class _EnvSpace:
             if other.drop_target >= 0:
                 self.pending_drops.append(other.drop_target)
         if kick > 0.0:
-            self.pending_kicks.append((kick, nx, ny))
+            self.pending_kicks.append((ball, kick, nx, ny))
 
     # --- one frame ----------------------------------------------------------------------------
 
@@ -238,31 +276,41 @@ class _EnvSpace:
                 angle[j], omega[j] = flipper_end(start, target, turn, stop, False, h, h)
                 body.angle = start
                 body.angular_velocity = (angle[j] - start) / h
-            before = self.ball.position
-            space_before = self.ball_in_space
+            before = [body.position for body in self.balls]
+            space_before = list(self.in_space)
             self.space.step(h)
             for j, body in enumerate(self.flipper_bodies):
                 body.angle = angle[j]  # exactly the kernel's angle
-            for kick, nx, ny in self.pending_kicks:
-                self.ball.velocity += (kick * nx, kick * ny)
+            for ball, kick, nx, ny in self.pending_kicks:
+                ball.velocity += (kick * nx, kick * ny)
             self.pending_kicks.clear()
             for j in self.pending_drops:  # they fall at the end of the substep, as the kernel's
                 state.targets_up[env, j] = False
             self.pending_drops.clear()
-            if space_before:
-                self._cross_sensors(before)
+            for i in range(world.n_balls):
+                if space_before[i] and self.balls[i].body_type == pymunk.Body.DYNAMIC:
+                    self._cross_sensors(i, before[i])
         self._sync_ball_out()
         if world.table.has_targets:
-            ball = state.balls[env]
-            update_targets(geometry, state, env, ball[BALL_X], ball[BALL_Y],
-                           world.table.ball.radius, settings.dt)  # fmt: skip
+            if world.n_balls == 1:
+                ball = state.balls[env]
+                update_targets(geometry, state, env, ball[BALL_X], ball[BALL_Y],
+                               world.table.ball.radius, settings.dt)  # fmt: skip
+            else:
+                spinner_id = first_spinner(geometry)
+                for j in range(geometry.spinners.shape[0]):
+                    turns = turn_spinner(geometry.spinners[j], state.spinners[env, j], settings.dt)
+                    state.hits[env, spinner_id + j] += turns
+                raise_banks_multi(geometry, state, env, world.ball_states[env],
+                                  world.ball_active[env], settings.radius, settings.dt)  # fmt: skip
 
-    def _cross_sensors(self, before: "pymunk.Vec2d") -> None:
-        """The kernel's sensor bookkeeping on the ball's move over the substep just stepped;
+    def _cross_sensors(self, i: int, before: "pymunk.Vec2d") -> None:
+        """The kernel's sensor bookkeeping on ball ``i``'s move over the substep just stepped;
         a drained ball leaves the space where it crossed the drain."""
         world, env = self.world, self.env
         geometry, state = world.geometry, world.state
-        after = self.ball.position
+        body = self.balls[i]
+        after = body.position
         dx, dy = after.x - before.x, after.y - before.y
         h = world.settings.dt / world.settings.substeps
         vx, vy = dx / h, dy / h  # the move's mean velocity
@@ -295,41 +343,54 @@ class _EnvSpace:
             state.hits[env, first_kickback(geometry) + kicked] += 1
             log_contact(state, env, first_kickback(geometry) + kicked, self.time + u * h, 0.0)
             state.kickback_lit[env, kicked] = False
-            self.ball.position = (before.x + dx, before.y + dy)
-            self.ball.velocity = (kick[KICKBACK_VX], kick[KICKBACK_VY])
-            self.ball.angular_velocity = 0.0
+            body.position = (before.x + dx, before.y + dy)
+            body.velocity = (kick[KICKBACK_VX], kick[KICKBACK_VY])
+            body.angular_velocity = 0.0
         drain = record_crossings(
             world.state, env, world.geometry, before.x, before.y, dx, dy, self.time, h,
             world.scratch.crossings[env],
         )  # fmt: skip
         if drain < math.inf:
-            self.ball.position = (before.x + drain * dx, before.y + drain * dy)
-            world.state.active[env] = False
-            self._remove_ball()
+            body.position = (before.x + drain * dx, before.y + drain * dy)
+            world.ball_active[env, i] = False
+            self._remove_ball(i)
 
     def _sync_ball_in(self) -> None:
-        """Write the state arrays into the ball body (they may have been set from outside)."""
-        ball = self.world.state.balls[self.env]
-        if not self.world.state.active[self.env]:
-            self._remove_ball()
-            return
-        self.ball.position = (ball[BALL_X], ball[BALL_Y])
-        self.ball.velocity = (ball[BALL_VX], ball[BALL_VY])
-        self.ball.angular_velocity = ball[BALL_SPIN]
-        if not self.ball_in_space:
-            self.space.add(self.ball, self.ball_shape)
-            self.ball_in_space = True
+        """Write the state arrays into the ball bodies (they may have been set from outside):
+        a ball out of play leaves the space, a held one is a kinematic body at rest."""
+        world, env = self.world, self.env
+        states, active, held = world.ball_states[env], world.ball_active[env], world.ball_held[env]
+        for i, body in enumerate(self.balls):
+            if not active[i]:
+                self._remove_ball(i)
+                continue
+            kind = pymunk.Body.KINEMATIC if held[i] else pymunk.Body.DYNAMIC
+            if body.body_type != kind:
+                body.body_type = kind
+                if kind == pymunk.Body.DYNAMIC:  # pymunk zeroes them on a change of type
+                    body.mass, body.moment = self.mass, self.moment
+            ball = states[i]
+            body.position = (ball[BALL_X], ball[BALL_Y])
+            body.velocity = (ball[BALL_VX], ball[BALL_VY])
+            body.angular_velocity = ball[BALL_SPIN]
+            if not self.in_space[i]:
+                self.space.add(body, self.ball_shapes[i])
+                self.in_space[i] = True
 
     def _sync_ball_out(self) -> None:
-        ball = self.world.state.balls[self.env]
-        ball[BALL_X], ball[BALL_Y] = self.ball.position
-        ball[BALL_VX], ball[BALL_VY] = self.ball.velocity
-        ball[BALL_SPIN] = self.ball.angular_velocity
+        world, env = self.world, self.env
+        for i, body in enumerate(self.balls):
+            if world.ball_held[env, i]:
+                continue  # exactly where it is held
+            ball = world.ball_states[env, i]
+            ball[BALL_X], ball[BALL_Y] = body.position
+            ball[BALL_VX], ball[BALL_VY] = body.velocity
+            ball[BALL_SPIN] = body.angular_velocity
 
-    def _remove_ball(self) -> None:
-        if self.ball_in_space:
-            self.space.remove(self.ball, self.ball_shape)
-            self.ball_in_space = False
+    def _remove_ball(self, i: int) -> None:
+        if self.in_space[i]:
+            self.space.remove(self.balls[i], self.ball_shapes[i])
+            self.in_space[i] = False
 
 
 def _flipper_shapes(

@@ -20,6 +20,7 @@ from pinball_env.tools.crosscheck.scenarios import (
     SUBSTEP,
     TIME_TOLERANCE,
     VELOCITY_TOLERANCE,
+    ball_ball_hits,
     corner_hits,
     flipper_drop,
     flipper_swing,
@@ -31,6 +32,7 @@ from pinball_env.tools.crosscheck.scenarios import (
     spinner_turns,
     target_hits,
     tunnelling,
+    two_balls_cradled,
     wall_bounces,
 )
 
@@ -65,6 +67,8 @@ def run(out: Path, trials: int = 100, free_frames: int = 600) -> dict[str, Any]:
         "plunger": plunger_launches([0.1, 0.2, 0.25, 0.5, 0.75, 1.0]),
         "drop_target": target_hits([0.5, 1.0, 2.0, 4.0]),
         "spinner": spinner_turns([0.5, 1.0, 2.0, 4.0]),
+        "ball_ball": ball_ball_hits(),
+        "two_balls_cradled": two_balls_cradled(),
     }
     report["summary"] = headline_figures(report)
     print_report(report)

@@ -14,6 +14,7 @@ from pinball_env.tools.crosscheck.scenarios import (
     SUBSTEP,
     agrees,
     nudge_agrees,
+    pair_agrees,
     plunger_agrees,
 )
 
@@ -98,6 +99,26 @@ def _targets_figures(report: dict[str, Any]) -> dict[str, Any]:
             e: all(row[e]["fell"] and row[e]["passed_when_down"] for row in drops) for e in ENGINES
         },
         "spinner_revolutions": {e: [row[e] for row in report["spinner"]] for e in ENGINES},
+        **_balls_figures(report),
+    }
+
+
+def _balls_figures(report: dict[str, Any]) -> dict[str, Any]:
+    """The headline figures of the ball-ball scenarios."""
+    pairs, cradle = report["ball_ball"], report["two_balls_cradled"]
+    return {
+        "ball_ball_within_tolerance": {
+            e: sum(pair_agrees(row, e) for row in pairs) / len(pairs) for e in ENGINES
+        },
+        "ball_ball_max_velocity_error_m_per_s": {
+            e: max(row[e]["velocity_error"] for row in pairs) for e in ENGINES
+        },
+        "ball_ball_max_contact_time_error_s": {
+            e: max(abs(row[e]["contact_time_error"]) for row in pairs) for e in ENGINES
+        },
+        "two_balls_cradled_gap_m": {e: cradle[e]["gap"] for e in ENGINES},
+        "two_balls_cradled_least_gap_m": {e: cradle[e]["least_gap"] for e in ENGINES},
+        "two_balls_cradled_apart_m": cradle["apart"],
     }
 
 
@@ -176,6 +197,33 @@ def _cabinet_findings(report: dict[str, Any]) -> list[str]:
         "apart (v h, the integration order) and cross the gate "
         f"{1e3 * summary['plunger_max_gate_time_difference_s']:.2f} ms apart; share within "
         f"tolerance of the analytic flight: {plunger}.",
+        *_balls_findings(report),
+    ]
+
+
+def _balls_findings(report: dict[str, Any]) -> list[str]:
+    """The ball-ball findings in words, each computed from the measured results."""
+    figures = _balls_figures(report)
+    share, error = (
+        figures["ball_ball_within_tolerance"],
+        figures["ball_ball_max_velocity_error_m_per_s"],
+    )
+    late = figures["ball_ball_max_contact_time_error_s"]
+    cradle = report["two_balls_cradled"]
+    least = figures["two_balls_cradled_least_gap_m"]
+    resting = all(all(cradle[e]["in_play"]) and max(cradle[e]["speeds"]) < 0.01 for e in ENGINES)
+    return [
+        f"{'Agree' if min(share.values()) == 1.0 else 'DISAGREE'}: ball-ball shots (head-on, "
+        "onto a resting ball, oblique at 45 deg; restitution 1 and 0.5) against the analytic "
+        f"answer: share within tolerance {share}; largest velocity error {error['swept']:.1e} "
+        f"m/s (swept), {error['pymunk']:.3f} m/s (pymunk: a substep late, its line of centres "
+        f"turned by the overlap); implied contact time off by {1e6 * late['swept']:.1f} us "
+        f"(swept) and {1e3 * late['pymunk']:.2f} ms (pymunk).",
+        f"{'Agree' if resting and least['swept'] >= 0.0 else 'DISAGREE'}: two balls cradled on "
+        f"a raised flipper come to rest touching, {1e6 * cradle['swept']['gap']:.2f} um apart "
+        f"(swept, never closer than {1e6 * least['swept']:.2f} um) and "
+        f"{1e6 * cradle['pymunk']['gap']:.2f} um (pymunk, which lets a resting contact overlap "
+        f"up to its slop); the engines' rest positions {1e6 * cradle['apart']:.1f} um apart.",
     ]
 
 
@@ -192,6 +240,13 @@ def print_report(report: dict[str, Any]) -> None:
             for e in ENGINES
         )
         print(f"  {row['speed']:4.1f} m/s: {cells}")
+    print("\nBall-ball shots: velocity error [m/s] and implied contact time error [ms] per engine")
+    for row in report["ball_ball"]:
+        cells = "   ".join(
+            f"{e} {row[e]['velocity_error']:.1e} {1e3 * row[e]['contact_time_error']:6.3f}"
+            for e in ENGINES
+        )
+        print(f"  {row['shot']:>20} {row['speed']:3.1f} m/s e={row['restitution']:3.1f}: {cells}")
     print("\nSpinner passed once at speed: revolutions")
     for row in report["spinner"]:
         print(f"  {row['speed']:4.1f} m/s: " + "   ".join(f"{e} {row[e]:3d}" for e in ENGINES))

@@ -1,0 +1,825 @@
+"""Several balls in one env (multiball, issue 49): the frame step by swept collision with
+ball-ball contact, a kernel path of its own: ``sim.World`` steps a table of several balls (or
+with saucers or locks) with it; the game (``game.multiball``) serves several balls from the
+trough.
+
+What it holds:
+
+- ``MultiState``: the balls of every env, ``(N, M, BALL_STATE_SIZE)``, whether each is in play
+  and whether it is held (in a lock or saucer: it does not move and is a fixed circle);
+- ``MultiScratch``: each ball's candidate set (``physics.near``, one per ball), its cached
+  earliest element contact and its bookkeeping over a substep (columns ``EV_*`` and ``W_*``);
+- :func:`step_balls`: one env's frame with M balls; :func:`step_multiworld`: the envs of a batch;
+- :func:`ball_overlap`, :func:`settle_balls`: the overlap and settle of ``step.deepest_overlap``
+  and ``step.settle`` with the other balls counted (as circles of radius 2r at their centres);
+- ``MultiWorld``, :func:`make_multiball`, :func:`place`, :func:`step_multiball`: a Python
+  helper to build and step a multi-ball world (for the kernel's tests; ``sim.World`` holds the
+  same arrays and steps them bitwise the same).
+
+The shared parts of the env (flippers, cabinet, drop targets, the contact log and hits) stay in
+``data.State`` and ``data.Scratch``; ``State.balls`` and ``State.active`` are not used here.
+``step.step_ball`` and ``step.step_world`` are untouched: every existing game stays bitwise.
+
+The step. Per substep: the flipper schedule as ``step_ball`` has it; gravity (and the
+cabinet's frame force) on every free ball; then an event loop over the substep's time. In
+each pass every moving ball's earliest contact with the table over the time left is found
+(walls, posts, flippers, standing drop targets: the very sweeps of ``step_ball``, over the
+ball's own candidate set), and every pair's ``balls.sweep_ball_ball`` (two moving circles are,
+in their relative motion, a point against a circle of radius 2r; a held or frozen ball is a
+fixed circle). The earliest event wins (ties: element contacts before pairs, then the lower
+ball index); every moving ball advances to its time (crossing sensors on the way: a drain
+crossing takes a ball out of play there); only the ball(s) of the event respond, as
+``step_ball`` does for an element, with ``balls.respond_ball_ball`` for a pair (the pair's
+restitution, zero below ``resting_speed``; its friction), and are separated: a skin off the
+element, or to 2r + skin apart, half each (all on the free one where the other is fixed; a
+push longer than a skin, off a deep overlap, is swept against the walls and posts:
+:func:`separate`).
+A ball's element contact stays valid while the ball keeps its path (it is cached, and found
+anew only for a ball that responded, or when a flipper was stopped), so a pass costs one
+element sweep per responding ball and one cheap pair test per pair.
+
+The passes end when the substep's time is used, or at the pass cap ``max_passes`` per moving
+ball (summed): then every ball still moving stops for the rest of the substep, as a wedged ball
+does in ``step_ball``. A ball whose own events make no progress MAX_STALLED_PASSES times in a
+row is wedged and stops alone (the others go on; it is a fixed circle to them). A wedged
+ball is unwedged from its last two elements, the flippers that could reach it are stopped
+where they are, and a ball pinched by a pushing flipper is put at rest (``step.release_wedge``).
+At the substep's end every ball that was wedged, touched a turning flipper or another ball, or
+started the substep inside another, is checked: one left deeper than the skin in an element or
+another ball is settled out (:func:`settle_balls`), and where there is no room it is put back
+where it started the substep (if that is clear of the other balls), at rest, and the flippers
+within its reach stop.
+
+Sensors, spinners and dark kickbacks are crossed on each ball's moves (:func:`cross_lines`); a
+lit kickback's line is an event of the ball that crosses it (it fires: the ball leaves at the
+kick). A drop target hit drops at the end of the substep; a bank rises only when no ball in
+play is within a radius of it (:func:`raise_banks_multi`).
+
+Differences from ``step_ball`` (the games use it as it is; Pinball-v3): contacts
+between balls are not logged in ``State.contacts`` nor counted in ``State.hits`` (they have no
+element id); hits are counted when they happen (``step_ball`` drops those of a pinched
+substep); a wedged ball stops the flippers near it at once, where ``step_ball`` holds them for
+the rest of the substep (the same, with one ball).
+"""
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from pinball_env.physics.balls import respond_ball_ball, sweep_ball_ball
+from pinball_env.physics.cabinet import cabinet_frame
+from pinball_env.physics.columns import (
+    BALL_SPIN,
+    BALL_STATE_SIZE,
+    BALL_VX,
+    BALL_VY,
+    BALL_X,
+    BALL_Y,
+    FLIPPER_REST_ANGLE,
+    KICKBACK_VX,
+    KICKBACK_VY,
+    PROP_FRICTION,
+    PROP_KICK,
+    PROP_RESTITUTION,
+    PROP_SIZE,
+)
+from pinball_env.physics.data import (
+    Geometry,
+    Scratch,
+    Settings,
+    State,
+    first_drop_target,
+    first_flipper,
+    first_kickback,
+    log_contact,
+    make_scratch,
+    make_state,
+    near_size,
+)
+from pinball_env.physics.near import (
+    NEAR_DROP_TARGETS,
+    NEAR_FLIPPERS,
+    NEAR_SENSORS,
+    NEAR_SOLIDS,
+    gather_near,
+    near_reach,
+    path_in_zone,
+)
+from pinball_env.physics.step import (
+    FLIPPER_CONTACT_TOLERANCE,
+    MAX_STALLED_PASSES,
+    MIN_PROGRESS,
+    SETTLE_ROUNDS,
+    deepest_overlap,
+    earliest_flipper_contact,
+    earliest_static_contact,
+    element_props,
+    flipper_angle_at,
+    flipper_end,
+    flipper_motion,
+    is_hit,
+    near_static_contact,
+    respond,
+    settle,
+    surface_distance,
+    unwedge,
+    within_reach,
+)
+from pinball_env.physics.sweep import INF, norm, point_segment_distance
+from pinball_env.physics.targets import (
+    count_kickbacks,
+    kickback_crossing,
+    record_crossings,
+    sensor_crossing,
+    spin_spinner,
+    sweep_drop_targets,
+    turn_spinner,
+)
+
+# A ball's cached earliest element contact, array of shape (N, M, EVENT_SIZE), float64.
+EV_VALID = 0  # 1 while the ball keeps the path it was found for, 0: find it anew
+EV_USED = 1  # the time to the contact (the whole time left where there is none) [s]
+EV_REMAINING = 2  # the substep's time left when it was found [s]
+EV_NX = 3  # the contact normal, from the surface towards the ball
+EV_NY = 4
+EV_SVX = 5  # the surface's velocity at the contact [m/s] (a swinging flipper's)
+EV_SVY = 6
+EV_ELEMENT = 7  # its element id (-1: none within the time left)
+EV_CUT = 8  # 1 where a flipper sweep ran out of slices (the ball's substep ends there)
+EVENT_SIZE = 9
+
+# A ball's bookkeeping over one substep, array of shape (N, M, WORK_SIZE), float64 (counts,
+# ids and flags stored as floats, exact).
+W_MOVING = 0  # 1 while the ball moves in this substep (in play, not held, not wedged)
+W_X0 = 1  # where it started the substep [m]
+W_Y0 = 2
+W_STALLED = 3  # its events in a row that made no progress
+W_LAST_REM = 4  # the substep's time left at its last event [s]
+W_LAST = 5  # the last two different elements it touched (-1: none) and their normals
+W_LAST_NX = 6
+W_LAST_NY = 7
+W_BEFORE = 8
+W_BEFORE_NX = 9
+W_BEFORE_NY = 10
+W_PUSHERS = 11  # bit j: flipper j pushed into it in this substep
+W_CHECK = 12  # 1: check its overlap at the substep's end (wedged, turning flipper, pair)
+W_WEDGED = 13  # 1: it stopped before the substep's end (wedged, cut or the pass cap)
+WORK_SIZE = 14
+
+
+class MultiState(NamedTuple):
+    """The balls of each env, updated in place by :func:`step_balls`; the first axis is the env,
+    the second the ball (a fixed slot: a drained ball keeps its slot, out of play)."""
+
+    balls: np.ndarray  # (N, M, BALL_STATE_SIZE) float64
+    active: np.ndarray  # (N, M) bool: the ball is on the table; cleared when it drains
+    held: np.ndarray  # (N, M) bool, input: held in a lock or saucer (fixed, of infinite mass)
+
+
+class MultiScratch(NamedTuple):
+    """Work arrays of :func:`step_balls`, one row per env and ball."""
+
+    near: np.ndarray  # (N, M, S) int64: each ball's candidate set (``physics.near``)
+    near_ends: np.ndarray  # (N, M, 4) int64
+    near_zone: np.ndarray  # (N, M, 3) float64 (radius < 0: none)
+    events: np.ndarray  # (N, M, EVENT_SIZE) float64: the cached earliest element contacts
+    work: np.ndarray  # (N, M, WORK_SIZE) float64: the substep's bookkeeping
+    dropped: np.ndarray  # (N, T) bool: drop targets hit in this substep (they drop at its end)
+    passes: np.ndarray  # (N,) int64: the event passes of the env's last frame (for the tests)
+
+
+def make_multi_state(n_envs: int, n_balls: int) -> MultiState:
+    """No ball in play, none held, for ``n_envs`` envs of ``n_balls`` slots."""
+    if n_envs < 1 or n_balls < 1:
+        raise ValueError(f"n_envs and n_balls must be >= 1, got {n_envs}, {n_balls}")
+    return MultiState(
+        balls=np.zeros((n_envs, n_balls, BALL_STATE_SIZE)),
+        active=np.zeros((n_envs, n_balls), dtype=np.bool_),
+        held=np.zeros((n_envs, n_balls), dtype=np.bool_),
+    )
+
+
+def make_multi_scratch(geometry: Geometry, n_envs: int, n_balls: int) -> MultiScratch:
+    """The work arrays of :func:`step_balls` for ``n_envs`` envs of ``n_balls`` slots."""
+    shape = (n_envs, n_balls)
+    return MultiScratch(
+        near=np.zeros((*shape, near_size(geometry)), dtype=np.int64),
+        near_ends=np.zeros((*shape, 4), dtype=np.int64),
+        near_zone=np.full((*shape, 3), -1.0),
+        events=np.zeros((*shape, EVENT_SIZE)),
+        work=np.zeros((*shape, WORK_SIZE)),
+        dropped=np.zeros((n_envs, geometry.drop_targets.shape[0]), dtype=np.bool_),
+        passes=np.zeros(n_envs, dtype=np.int64),
+    )
+
+
+# --- overlaps with the other balls -----------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def ball_overlap(x, y, i, balls, active, r):
+    """How deep a ball of radius ``r`` at (x, y) lies in the ball in play it overlaps most,
+    ball ``i`` (itself) left out [m]; 0 or less when it overlaps none. The other ball counts as
+    a circle of radius 2r at its centre, so the depth is ``2r - d`` at centre distance d."""
+    deepest = -INF
+    for j in range(balls.shape[0]):
+        if j != i and active[j]:
+            deepest = max(deepest, 2.0 * r - norm(x - balls[j, BALL_X], y - balls[j, BALL_Y]))
+    return deepest
+
+
+@njit(cache=True)
+def settle_balls(x, y, i, balls, active, geometry, angles, up, r, skin):
+    """``step.settle`` with the other balls in play as fixed circles of radius 2r: push ball
+    ``i`` at (x, y) out of every element (``settle``'s rounds, each move at most MAX_NUDGE
+    radii: no room near here leaves it where it was) and out of every ball it overlaps by more
+    than half the skin, to 2r + skin from its centre, in rounds (projected Gauss-Seidel) until
+    it overlaps none or SETTLE_ROUNDS have passed. A push off a ball is swept against the walls
+    and posts and stops a skin short of them (so it may be long: balls placed into one another
+    are pushed apart whatever the overlap, never through a wall). Returns the new centre."""
+    target = 2.0 * r + skin
+    for _ in range(SETTLE_ROUNDS):
+        x, y = settle(x, y, geometry, angles, up, r, skin)
+        moved = False
+        for j in range(balls.shape[0]):
+            if j == i or not active[j]:
+                continue
+            gx, gy = x - balls[j, BALL_X], y - balls[j, BALL_Y]
+            d = norm(gx, gy)
+            if d >= target - 0.5 * skin:
+                continue
+            nx, ny = (gx / d, gy / d) if d > 0.0 else (0.0, 1.0)  # coincident: up the table
+            push = target - d
+            t, _, _, _ = earliest_static_contact(
+                x, y, nx * push, ny * push, r + skin, geometry.segments, geometry.segment_bounds,
+                geometry.segment_one_sided, geometry.circles,
+            )  # fmt: skip
+            push *= min(t, 1.0)
+            if push > 0.0:
+                x += nx * push
+                y += ny * push
+                moved = True
+        if not moved:
+            break
+    return x, y
+
+
+@njit(cache=True)
+def hold_flippers(x, y, r, flippers, angle, omegas, stops, targets, elapsed, pushers, pinch):
+    """Stop, at ``elapsed`` seconds into the substep, every flipper still turning that could
+    reach a wedged ball at (x, y) (``step.release_wedge``: or it would sweep through the ball
+    unchecked): its stop moves to now, its target to its angle now. Where ``pinch`` is set, a
+    flipper that pushed into the ball (bit j of ``pushers``) stalls where it started the
+    substep (as ``step_ball`` does for a pinched ball). Returns whether one did (the ball is
+    pinched)."""
+    pinched = False
+    for j in range(flippers.shape[0]):
+        if omegas[j] != 0.0 and stops[j] > elapsed and within_reach(x, y, r, flippers[j]):
+            stops[j] = elapsed
+            targets[j] = flipper_angle_at(angle[j], omegas[j], stops[j], elapsed)
+            if (pushers >> j) & 1 == 1:
+                pinched = True
+                if pinch:
+                    stops[j] = 0.0
+                    targets[j] = angle[j]
+    return pinched
+
+
+@njit(cache=True)
+def raise_banks_multi(geometry, state, env, balls, active, r, dt):
+    """``targets.raise_banks`` with every ball in play: a bank rises only when no ball in play
+    lies within a radius of one of its targets."""
+    bank_of, targets = geometry.drop_target_bank, geometry.drop_targets
+    up, clock = state.targets_up[env], state.bank_clock[env]
+    for bank in range(geometry.bank_reset.shape[0]):
+        down = True
+        for j in range(targets.shape[0]):
+            if bank_of[j] == bank and up[j]:
+                down = False
+        if not down:
+            clock[bank] = 0.0
+            continue
+        clock[bank] += dt
+        if clock[bank] < geometry.bank_reset[bank]:
+            continue
+        clear = True
+        for i in range(balls.shape[0]):
+            for j in range(targets.shape[0] if active[i] else 0):
+                t = targets[j]
+                x, y = balls[i, BALL_X], balls[i, BALL_Y]
+                if (
+                    bank_of[j] == bank
+                    and point_segment_distance(x, y, t[0], t[1], t[2], t[3]) < 2 * r
+                ):
+                    clear = False
+        if clear:
+            for j in range(targets.shape[0]):
+                if bank_of[j] == bank:
+                    up[j] = True
+            clock[bank] = 0.0
+
+
+@njit(cache=True)
+def wedge(ball, w, remaining, h, geometry, angle, omegas, stops, targets, angles, r, skin, cut):
+    """Ball ``ball`` (its bookkeeping row ``w``) stops moving for the rest of the substep,
+    ``remaining`` seconds before its end, as a wedged ball does in ``step.step_ball``: unless
+    its flipper sweep was cut, it is cleared of its last two elements (``step.unwedge``); the
+    flippers that could reach it stop where they are, and where one of them pushed into it
+    the ball is pinched: at rest, the pushing flippers stalled where they started the substep
+    (:func:`hold_flippers`)."""
+    w[W_MOVING] = 0.0
+    w[W_WEDGED] = 1.0
+    w[W_CHECK] = 1.0
+    w[W_LAST_REM] = remaining
+    elapsed = h - remaining
+    flippers = geometry.flippers
+    if not cut and w[W_BEFORE] >= 0.0:
+        for j in range(flippers.shape[0]):
+            angles[j] = flipper_angle_at(angle[j], omegas[j], stops[j], elapsed)
+        ball[BALL_X], ball[BALL_Y] = unwedge(
+            ball[BALL_X], ball[BALL_Y], int(w[W_LAST]), w[W_LAST_NX], w[W_LAST_NY],
+            int(w[W_BEFORE]), w[W_BEFORE_NX], w[W_BEFORE_NY], geometry, angles, r, skin,
+        )  # fmt: skip
+    pushers = int(w[W_PUSHERS])
+    if hold_flippers(ball[BALL_X], ball[BALL_Y], r, flippers, angle, omegas, stops, targets,
+                     elapsed, pushers, not cut) and not cut:  # fmt: skip
+        ball[BALL_VX] = ball[BALL_VY] = ball[BALL_SPIN] = 0.0
+
+
+@njit(cache=True)
+def separate(ball, nx, ny, push, r, skin, geometry):
+    """Move ``ball`` (a row of ``MultiState.balls``) by ``push`` along n, away from the ball
+    it touched. A push of up to a skin is made as it is (the ball, at least r off every
+    surface, stays out of them); a longer one (balls that overlapped deeply, or a ball pushed
+    off a fixed one) is swept against the walls and posts, as a swinging flipper's push is in
+    ``step_ball``, and stops a skin short of the first it would touch."""
+    if push > skin:
+        t, _, _, _ = earliest_static_contact(
+            ball[BALL_X], ball[BALL_Y], nx * push, ny * push, r + skin, geometry.segments,
+            geometry.segment_bounds, geometry.segment_one_sided, geometry.circles,
+        )  # fmt: skip
+        push *= min(t, 1.0)
+    ball[BALL_X] += nx * push
+    ball[BALL_Y] += ny * push
+    return push
+
+
+@njit(cache=True)
+def cross_lines(state, env, geometry, x, y, vx, vy, dt, start):
+    """The spinner and kickback lines of env ``env`` that a ball moving from (x, y) at
+    (vx, vy) for ``dt`` seconds, from ``start`` [s into the frame], crosses: each spinner it
+    crosses is spun (``targets.spin_spinner``), each dark kickback crossed against its kick is
+    a hit (``targets.count_kickbacks``). (A lit one is an event of the ball: the move ends on
+    its line, see :func:`step_balls`.)"""
+    kickbacks, lit = geometry.kickbacks, state.kickback_lit[env]
+    if kickbacks.shape[0] > 0:
+        count_kickbacks(state, env, x, y, vx, vy, dt, kickbacks, lit, first_kickback(geometry),
+                        start + dt)  # fmt: skip
+    spinners = geometry.spinners
+    for j in range(spinners.shape[0]):
+        u = sensor_crossing(x, y, vx * dt, vy * dt, spinners[j])
+        if u < INF:
+            spin_spinner(spinners[j], state.spinners[env, j], vx, vy, start + dt * u)
+
+
+# --- the step --------------------------------------------------------------------------------
+
+
+# Long by design, as step.step_ball: the hot loop of a multi-ball frame, written out.
+@njit(cache=True, inline="always")
+def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
+    """Advance env ``env`` by one frame in place with its M balls (``multi``'s rows): its
+    flippers and every ball in play (module docstring). ``pair`` is the ball-ball material,
+    a ``PROP_SIZE`` row (restitution, friction; the kick is not used). Returns whether every
+    ball's state is finite afterwards."""
+    flipper_id = first_flipper(geometry)
+    h = settings.dt / settings.substeps
+    r = settings.radius
+    skin = settings.skin
+    tol = FLIPPER_CONTACT_TOLERANCE * skin
+    reach2 = 2.0 * r
+    segments, bounds = geometry.segments, geometry.segment_bounds
+    one_sided, circles = geometry.segment_one_sided, geometry.circles
+    flippers, sensors = geometry.flippers, geometry.sensors
+    n_flippers = flippers.shape[0]
+    gravity = norm(settings.gravity_x, settings.gravity_y)
+    balls, active, fixed = multi.balls[env], multi.active[env], multi.held[env]
+    n_balls = balls.shape[0]
+    near, near_ends, zone = mscratch.near[env], mscratch.near_ends[env], mscratch.near_zone[env]
+    events, work, dropped = mscratch.events[env], mscratch.work[env], mscratch.dropped[env]
+    angle, omega = state.flipper_angle[env], state.flipper_omega[env]
+    targets, omegas, stops = scratch.targets[env], scratch.omegas[env], scratch.stops[env]
+    angles, pass_stops = scratch.angles[env], scratch.pass_stops[env]
+    up = state.targets_up[env]
+    state.contact_count[env] = 0
+    state.hits[env, :] = 0
+    mscratch.passes[env] = 0
+    has_cabinet = geometry.cabinet.shape[0] > 0
+    cabinet_dv = scratch.cabinet_dv[env]
+    dvx = dvy = 0.0
+    if has_cabinet:
+        cabinet_frame(state.cabinet[env], geometry.cabinet[0], h, cabinet_dv)
+    kick_scale = 0.0 if state.tilted[env] else 1.0
+    n_targets = geometry.drop_targets.shape[0]
+    target_id = first_drop_target(geometry)
+    n_kickbacks = geometry.kickbacks.shape[0]
+    n_lines = geometry.spinners.shape[0] + n_kickbacks
+    kickback_id = first_kickback(geometry)
+    pair_restitution, pair_friction = pair[PROP_RESTITUTION], pair[PROP_FRICTION]
+    for k in range(settings.substeps):
+        for j in range(n_flippers):
+            targets[j], omegas[j], stops[j] = flipper_motion(
+                flippers[j], angle[j], state.flipper_command[env, j]
+            )
+        if has_cabinet:
+            dvx, dvy = cabinet_dv[k, 0], cabinet_dv[k, 1]
+        moving = 0
+        for i in range(n_balls):
+            w = work[i]
+            w[:] = 0.0
+            w[W_X0], w[W_Y0] = balls[i, BALL_X], balls[i, BALL_Y]
+            w[W_LAST] = w[W_BEFORE] = -1.0
+            w[W_LAST_REM] = h
+            events[i, EV_VALID] = 0.0
+            if active[i] and not fixed[i]:
+                w[W_MOVING] = 1.0
+                moving += 1
+                balls[i, BALL_VX] += settings.gravity_x * h - dvx
+                balls[i, BALL_VY] += settings.gravity_y * h - dvy
+                # A ball that starts the substep in another (placed there) is settled at its end.
+                if ball_overlap(balls[i, BALL_X], balls[i, BALL_Y], i, balls, active, r) > skin:
+                    w[W_CHECK] = 1.0
+        remaining = h
+        cap = settings.max_passes * moving
+        passes = 0
+        while remaining > 0.0 and moving > 0:
+            if passes >= cap:  # the pass cap: every ball still moving stops where it is
+                for i in range(n_balls):
+                    if work[i, W_MOVING] == 1.0:
+                        wedge(balls[i], work[i], remaining, h, geometry, angle, omegas, stops,
+                              targets, angles, r, skin, False)  # fmt: skip
+                moving = 0
+                break
+            passes += 1
+            mscratch.passes[env] += 1
+            elapsed = h - remaining
+            for j in range(n_flippers):
+                angles[j] = flipper_angle_at(angle[j], omegas[j], stops[j], elapsed)
+                pass_stops[j] = max(stops[j] - elapsed, 0.0)
+            # Each moving ball's earliest element contact (cached while it keeps its path).
+            best = INF
+            best_i = best_j = -1
+            for i in range(n_balls):
+                if work[i, W_MOVING] == 0.0:
+                    continue
+                ev = events[i]
+                x, y, vx, vy = (
+                    balls[i, BALL_X],
+                    balls[i, BALL_Y],
+                    balls[i, BALL_VX],
+                    balls[i, BALL_VY],
+                )
+                if ev[EV_VALID] == 0.0:
+                    nr, ne = near[i], near_ends[i]
+                    if not path_in_zone(x, y, vx * remaining, vy * remaining, zone[i], r, skin):
+                        reach = near_reach(vx, vy, remaining, r, gravity, skin)
+                        gather_near(x, y, reach, geometry, nr, ne, zone[i])
+                    t, nx, ny, element = near_static_contact(
+                        x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
+                        circles, nr, ne[NEAR_SOLIDS],
+                    )  # fmt: skip
+                    svx = svy = 0.0
+                    cut = False
+                    if n_flippers > 0:
+                        tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
+                            x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops,
+                            tol, nr, ne[NEAR_SOLIDS], ne[NEAR_FLIPPERS],
+                        )  # fmt: skip
+                        if tau < t * remaining:
+                            t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
+                            element = flipper_id + flipper
+                            cut = fnx == 0.0 and fny == 0.0
+                    if n_targets > 0:
+                        t, nx, ny, svx, svy, element, cut = sweep_drop_targets(
+                            state, env, geometry, x, y, vx * remaining, vy * remaining, r, t,
+                            nx, ny, svx, svy, element, cut, nr, ne[NEAR_FLIPPERS],
+                            ne[NEAR_DROP_TARGETS],
+                        )  # fmt: skip
+                    used = remaining * min(t, 1.0)
+                    if n_kickbacks > 0:  # a lit kickback's line on the way: it fires there
+                        kicked, u = kickback_crossing(
+                            x, y, vx, vy, used, geometry.kickbacks, state.kickback_lit[env]
+                        )
+                        if kicked >= 0:
+                            used *= u
+                            element, cut = kickback_id + kicked, False
+                    ev[EV_VALID] = 1.0
+                    ev[EV_USED] = used
+                    ev[EV_REMAINING] = remaining
+                    ev[EV_NX], ev[EV_NY], ev[EV_SVX], ev[EV_SVY] = nx, ny, svx, svy
+                    ev[EV_ELEMENT] = element
+                    ev[EV_CUT] = 1.0 if cut else 0.0
+                if ev[EV_ELEMENT] < 0.0 and ev[EV_CUT] == 0.0:
+                    continue  # a free path to the substep's end
+                if ev[EV_REMAINING] == remaining:
+                    dt = ev[EV_USED]
+                else:  # found in an earlier pass: the same contact, so much later
+                    dt = max(remaining - (ev[EV_REMAINING] - ev[EV_USED]), 0.0)
+                if dt < best:
+                    best, best_i, best_j = dt, i, -1
+            # Every pair's contact, a fixed ball (held, wedged) not moving.
+            for i in range(n_balls):
+                if not active[i]:
+                    continue
+                mi = remaining if work[i, W_MOVING] == 1.0 else 0.0
+                for j in range(i + 1, n_balls):
+                    if not active[j]:
+                        continue
+                    mj = remaining if work[j, W_MOVING] == 1.0 else 0.0
+                    if mi == 0.0 and mj == 0.0:
+                        continue
+                    t, _, _ = sweep_ball_ball(
+                        balls[i, BALL_X], balls[i, BALL_Y], balls[i, BALL_VX] * mi,
+                        balls[i, BALL_VY] * mi, balls[j, BALL_X], balls[j, BALL_Y],
+                        balls[j, BALL_VX] * mj, balls[j, BALL_VY] * mj, reach2,
+                    )  # fmt: skip
+                    if t < INF and remaining * t < best:
+                        best, best_i, best_j = remaining * t, i, j
+            # Every moving ball advances to the event (or the substep's end), crossing sensors.
+            dt = min(best, remaining)
+            for i in range(n_balls):
+                if work[i, W_MOVING] == 0.0:
+                    continue
+                x, y, vx, vy = (
+                    balls[i, BALL_X],
+                    balls[i, BALL_Y],
+                    balls[i, BALL_VX],
+                    balls[i, BALL_VY],
+                )
+                nr, ne = near[i], near_ends[i]
+                if n_lines > 0:
+                    cross_lines(state, env, geometry, x, y, vx, vy, dt, k * h + elapsed)
+                crossed = False
+                for s in range(ne[NEAR_DROP_TARGETS], ne[NEAR_SENSORS]):
+                    if sensor_crossing(x, y, vx * dt, vy * dt, sensors[nr[s]]) < INF:
+                        crossed = True
+                        break
+                if crossed:
+                    drain = record_crossings(
+                        state, env, geometry, x, y, vx * dt, vy * dt, k * h + elapsed, dt,
+                        scratch.crossings[env],
+                    )  # fmt: skip
+                    if drain < INF:
+                        balls[i, BALL_X] = x + vx * dt * drain
+                        balls[i, BALL_Y] = y + vy * dt * drain
+                        active[i] = False
+                        work[i, W_MOVING] = 0.0
+                        work[i, W_CHECK] = 0.0
+                        moving -= 1
+                        continue
+                balls[i, BALL_X] = x + vx * dt
+                balls[i, BALL_Y] = y + vy * dt
+            remaining -= dt
+            if best_i < 0 or not active[best_i] or (best_j >= 0 and not active[best_j]):
+                continue  # no event, or a ball of it drained on the way
+            if best_j < 0:
+                # An element contact of ball best_i: step_ball's response and separation.
+                i = best_i
+                ev, w, ball = events[i], work[i], balls[i]
+                ev[EV_VALID] = 0.0
+                element = int(ev[EV_ELEMENT])
+                if element >= kickback_id:  # a kickback fires, if still lit: the ball's kick
+                    lit = state.kickback_lit[env]
+                    if lit[element - kickback_id]:
+                        kick = geometry.kickbacks[element - kickback_id]
+                        ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = (
+                            kick[KICKBACK_VX], kick[KICKBACK_VY], 0.0
+                        )  # fmt: skip
+                        state.hits[env, element] += 1
+                        log_contact(state, env, element, k * h + h - remaining, 0.0)
+                        lit[element - kickback_id] = False
+                    continue
+                if ev[EV_CUT] == 1.0:  # a cut drops the rest of its substep, as a wedge does
+                    wedge(ball, w, remaining, h, geometry, angle, omegas, stops, targets, angles,
+                          r, skin, True)  # fmt: skip
+                    moving -= 1
+                    events[:, EV_VALID] = 0.0  # flippers may have stopped
+                    continue
+                nx, ny, svx, svy = ev[EV_NX], ev[EV_NY], ev[EV_SVX], ev[EV_SVY]
+                props = element_props(element, geometry)
+                vx, vy, spin, speed = respond(
+                    ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN], nx, ny, svx, svy, r,
+                    props[PROP_RESTITUTION], props[PROP_FRICTION], kick_scale * props[PROP_KICK],
+                    settings.resting_speed,
+                )  # fmt: skip
+                ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
+                for j in range(n_flippers):
+                    angles[j] = flipper_angle_at(angle[j], omegas[j], stops[j], h - remaining)
+                x, y = ball[BALL_X], ball[BALL_Y]
+                push = r + skin - surface_distance(x, y, element, geometry, angles)
+                on_flipper = flipper_id <= element < flipper_id + n_flippers  # not a target
+                if on_flipper and push > 0.0 and svx * nx + svy * ny > 0.0:
+                    t_push, _, _, _ = earliest_static_contact(
+                        x, y, nx * push, ny * push, r + skin, segments, bounds, one_sided,
+                        circles,
+                    )  # fmt: skip
+                    push *= min(t_push, 1.0)
+                ball[BALL_X], ball[BALL_Y] = x + nx * push, y + ny * push
+                if element != w[W_LAST]:
+                    w[W_BEFORE], w[W_BEFORE_NX], w[W_BEFORE_NY] = (
+                        w[W_LAST],
+                        w[W_LAST_NX],
+                        w[W_LAST_NY],
+                    )
+                w[W_LAST], w[W_LAST_NX], w[W_LAST_NY] = element, nx, ny
+                log_contact(state, env, element, k * h + h - remaining, speed)
+                if is_hit(speed, kick_scale * props[PROP_KICK], settings.resting_speed):
+                    state.hits[env, element] += 1
+                    if target_id <= element < target_id + n_targets:
+                        dropped[element - target_id] = True
+                if on_flipper and svx * nx + svy * ny > 0.0:
+                    w[W_PUSHERS] = int(w[W_PUSHERS]) | (1 << (element - flipper_id))
+                if on_flipper and omegas[element - flipper_id] != 0.0:
+                    w[W_CHECK] = 1.0
+                involved_a, involved_b = i, -1
+            else:
+                # A pair: the equal-mass impulse, then apart to 2r + skin.
+                i, j = best_i, best_j
+                a, b = balls[i], balls[j]
+                a_fixed = work[i, W_MOVING] == 0.0
+                b_fixed = work[j, W_MOVING] == 0.0
+                gx, gy = a[BALL_X] - b[BALL_X], a[BALL_Y] - b[BALL_Y]
+                d = norm(gx, gy)
+                if d > 0.0:
+                    nx, ny = gx / d, gy / d
+                else:  # coincident centres: against a's motion relative to b
+                    rvx, rvy = a[BALL_VX] - b[BALL_VX], a[BALL_VY] - b[BALL_VY]
+                    speed = norm(rvx, rvy)
+                    nx, ny = (-rvx / speed, -rvy / speed) if speed > 0.0 else (0.0, 1.0)
+                vn = (a[BALL_VX] - b[BALL_VX]) * nx + (a[BALL_VY] - b[BALL_VY]) * ny
+                e = pair_restitution if -vn >= settings.resting_speed else 0.0
+                (a[BALL_VX], a[BALL_VY], a[BALL_SPIN], b[BALL_VX], b[BALL_VY],
+                 b[BALL_SPIN]) = respond_ball_ball(
+                    a[BALL_VX], a[BALL_VY], a[BALL_SPIN], b[BALL_VX], b[BALL_VY], b[BALL_SPIN],
+                    nx, ny, r, e, pair_friction, a_fixed, b_fixed,
+                )  # fmt: skip
+                push = reach2 + skin - d
+                if push > 0.0:
+                    share_a = 0.0 if a_fixed else (1.0 if b_fixed else 0.5)
+                    separate(a, nx, ny, push * share_a, r, skin, geometry)
+                    separate(b, -nx, -ny, push * (1.0 - share_a), r, skin, geometry)
+                events[i, EV_VALID] = events[j, EV_VALID] = 0.0
+                work[i, W_CHECK] = work[j, W_CHECK] = 1.0
+                involved_a, involved_b = (-1 if a_fixed else i), (-1 if b_fixed else j)
+            # The stall guard of each ball of the event: no progress since its last event.
+            for i in (involved_a, involved_b):
+                if i < 0:
+                    continue
+                w = work[i]
+                w[W_STALLED] = (
+                    w[W_STALLED] + 1 if w[W_LAST_REM] - remaining <= MIN_PROGRESS * h else 0
+                )
+                w[W_LAST_REM] = remaining
+                if w[W_STALLED] >= MAX_STALLED_PASSES:
+                    wedge(balls[i], w, remaining, h, geometry, angle, omegas, stops, targets,
+                          angles, r, skin, False)  # fmt: skip
+                    moving -= 1
+                    events[:, EV_VALID] = 0.0  # flippers may have stopped
+        # The substep's end: settle a ball left deeper than the skin in an element or a ball.
+        for i in range(n_balls):
+            if work[i, W_CHECK] == 0.0 or not active[i] or fixed[i]:
+                continue
+            for j in range(n_flippers):
+                angles[j], _ = flipper_end(angle[j], targets[j], omegas[j], stops[j], False, h, h)
+            ball = balls[i]
+            x, y = ball[BALL_X], ball[BALL_Y]
+            deep = max(deepest_overlap(x, y, geometry, angles, up, r),
+                       ball_overlap(x, y, i, balls, active, r))  # fmt: skip
+            if deep <= skin:
+                continue
+            x, y = settle_balls(x, y, i, balls, active, geometry, angles, up, r, skin)
+            deep = max(deepest_overlap(x, y, geometry, angles, up, r),
+                       ball_overlap(x, y, i, balls, active, r))  # fmt: skip
+            if deep > skin:
+                # No room: back where it started the substep (if that is clear of the balls),
+                # at rest, and the flippers within its reach stall where they started.
+                x0, y0 = work[i, W_X0], work[i, W_Y0]
+                if ball_overlap(x0, y0, i, balls, active, r) <= skin:
+                    x, y = x0, y0
+                ball[BALL_VX] = ball[BALL_VY] = ball[BALL_SPIN] = 0.0
+                for j in range(n_flippers):
+                    if omegas[j] != 0.0 and within_reach(x, y, r, flippers[j]):
+                        stops[j], targets[j] = 0.0, angle[j]
+            ball[BALL_X], ball[BALL_Y] = x, y
+        for j in range(n_targets):
+            if dropped[j]:
+                up[j] = False
+                dropped[j] = False
+        for j in range(n_flippers):
+            angle[j], omega[j] = flipper_end(angle[j], targets[j], omegas[j], stops[j], False, h, h)
+    if n_targets > 0 or geometry.spinners.shape[0] > 0:
+        spinner_id = target_id + n_targets
+        for j in range(geometry.spinners.shape[0]):
+            state.hits[env, spinner_id + j] += turn_spinner(
+                geometry.spinners[j], state.spinners[env, j], settings.dt
+            )
+        raise_banks_multi(geometry, state, env, balls, active, r, settings.dt)
+    finite = True
+    for i in range(n_balls):
+        b = balls[i]
+        finite = finite and math.isfinite(
+            b[BALL_X] + b[BALL_Y] + b[BALL_VX] + b[BALL_VY] + b[BALL_SPIN]
+        )
+    return finite
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def step_multiworld(geometry, settings, state, scratch, multi, mscratch, pair, moving, start, stop):
+    """:func:`step_balls` for the envs from ``start`` to ``stop`` for which ``moving`` is set
+    (``step.step_world``'s contract, with ``multi`` the balls). Returns the number of stepped
+    envs with a ball whose state is not finite afterwards."""
+    faults = 0
+    for env in range(start, stop):
+        if moving[env] and not step_balls(
+            geometry, settings, state, scratch, multi, mscratch, pair, env
+        ):
+            faults += 1
+    return faults
+
+
+# --- a Python helper ---------------------------------------------------------------------------
+
+
+@dataclass
+class MultiWorld:
+    """A multi-ball world's arrays: the packed table, the shared state and scratch, the balls,
+    their scratch and the ball-ball material (a ``PROP_SIZE`` row)."""
+
+    geometry: Geometry
+    settings: Settings
+    state: State
+    scratch: Scratch
+    multi: MultiState
+    mscratch: MultiScratch
+    pair: np.ndarray
+
+    @property
+    def n_envs(self) -> int:
+        return self.multi.balls.shape[0]
+
+
+def make_multiball(
+    table, n_envs: int, n_balls: int, pair: tuple[float, float] | None = None
+) -> MultiWorld:
+    """A multi-ball world of ``n_envs`` envs with ``n_balls`` slots each on ``table``: no ball
+    in play, flippers at rest, drop targets up, kickbacks as the table has them. ``pair`` is the
+    ball-ball (restitution, friction); by default the table's ``ball.material`` (restitution 1
+    and no friction where the table names none)."""
+    geometry, settings = table.pack(), table.pack_settings()
+    state = make_state(geometry, n_envs)
+    state.flipper_angle[:] = geometry.flippers[:, FLIPPER_REST_ANGLE]
+    for env in range(n_envs):
+        state.kickback_lit[env] = [k.lit for k in table.kickbacks]
+    if pair is None:
+        material = table.ball.material
+        pair = (1.0, 0.0) if material is None else (
+            table.material(material).restitution, table.material(material).friction
+        )  # fmt: skip
+    props = np.zeros(PROP_SIZE)
+    props[PROP_RESTITUTION], props[PROP_FRICTION] = pair
+    return MultiWorld(
+        geometry, settings, state, make_scratch(geometry, settings, n_envs),
+        make_multi_state(n_envs, n_balls), make_multi_scratch(geometry, n_envs, n_balls), props,
+    )  # fmt: skip
+
+
+def place(
+    world: MultiWorld,
+    env: int,
+    ball: int,
+    position: tuple[float, float],
+    velocity: tuple[float, float] = (0.0, 0.0),
+    held: bool = False,
+) -> None:
+    """Put ball slot ``ball`` of env ``env`` in play at ``position`` with ``velocity``, no spin
+    (``held``: fixed where it is)."""
+    row = world.multi.balls[env, ball]
+    row[:] = 0.0
+    row[BALL_X], row[BALL_Y] = position
+    row[BALL_VX], row[BALL_VY] = velocity
+    world.multi.active[env, ball] = True
+    world.multi.held[env, ball] = held
+
+
+def step_multiball(world: MultiWorld, moving: np.ndarray | None = None) -> int:
+    """Advance every env of ``world`` (or those ``moving`` sets) by one frame; returns the
+    number of envs with a non-finite ball state."""
+    if moving is None:
+        moving = np.ones(world.n_envs, dtype=np.bool_)
+    return step_multiworld(
+        world.geometry, world.settings, world.state, world.scratch, world.multi, world.mscratch,
+        world.pair, moving, 0, world.n_envs,
+    )  # fmt: skip

@@ -1,0 +1,265 @@
+"""World with several balls (issue 49): the API, the several-ball kernel behind it, saucers and
+locks (capture, hold time, kick, a fast ball passing over, slots filled in order, release)."""
+
+import copy
+import math
+import pickle
+
+import numpy as np
+import pytest
+import yaml
+
+from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.multiball import make_multiball, place, step_multiball
+from pinball_env.sim.world import World
+from pinball_env.table import builtin_tables_dir, load_table, table_from_dict
+from tests.table.multiball import multiball_dict
+
+DT = 1.0 / 60.0
+SAUCER = {
+    "name": "saucer",
+    "center": [0.255, 0.50],
+    "radius": 0.02,
+    "capture_speed": 0.5,
+    "hold_time": 0.5,
+    "kick": [1.0, 0.5],
+    "score": 500,
+}
+LOCK = {
+    "name": "lock",
+    "slots": [[0.10, 0.80], [0.10, 0.84]],
+    "capture_speed": 1.0,
+    "kick": [0.5, -0.5],
+    "score": 1000,
+}
+
+
+def level_box(balls=3, saucers=(SAUCER,), locks=(LOCK,)):
+    """The box laid level (balls fly straight), with a saucer, a lock and a trough."""
+    data = yaml.safe_load((builtin_tables_dir() / "box.yaml").read_text(encoding="utf-8"))
+    data["slope_deg"] = 0.0
+    data["materials"]["steel"] = {"restitution": 0.95, "friction": 0.0}
+    data["ball"]["material"] = "steel"
+    data["plunger"] = {"position": [0.45, 0.05], "speed": [1.0, 2.0]}
+    data["saucers"] = copy.deepcopy(list(saucers))
+    data["locks"] = copy.deepcopy(list(locks))
+    data["trough"] = {"balls": balls}
+    return table_from_dict(data, "<level box>")
+
+
+def frames_until(world, condition, limit):
+    """Step until ``condition()`` holds; the number of frames it took (None: not in limit)."""
+    for frame in range(1, limit + 1):
+        world.step()
+        if condition():
+            return frame
+    return None
+
+
+def test_one_ball_tables_keep_the_one_ball_kernel_and_its_arrays():
+    world = World(load_table("classic_v1"), 2)
+    assert world.n_balls == 1 and world.multi is None
+    assert world.ball_states.shape == (2, 1, 5)
+    assert np.shares_memory(world.ball_states, world.balls)
+    world.place_ball(1, (0.3, 0.5), (0.1, 0.2))
+    assert world.ball_states[1, 0, BALL_X] == 0.3 and world.ball_active[1, 0]
+    with pytest.raises(ValueError, match="ball must be"):
+        world.place_ball(0, (0.3, 0.5), ball=1)
+    with pytest.raises(ValueError, match="nothing holds"):
+        world.hold_ball(0, 0, (0.3, 0.5))
+
+
+def test_several_balls_step_as_the_multiball_kernel_bitwise():
+    table = table_from_dict(multiball_dict(), "<multiball>")
+    world = World(table, 2)
+    assert world.n_balls == 3 and world.ball_states.shape == (2, 3, 5)
+    assert world.ball_active.tolist() == [[True, False, False]] * 2
+    with pytest.raises(AttributeError, match="ball_states"):
+        world.balls  # noqa: B018
+    with pytest.raises(AttributeError, match="ball_active"):
+        world.active  # noqa: B018
+    reference = make_multiball(table, 2, 3)
+    threaded = World(table, 2, num_threads=2)  # bitwise the same on any number of threads
+    starts = [((0.25, 0.6), (0.5, 1.0)), ((0.3, 0.7), (-0.4, 0.2)), ((0.2, 0.8), (0.0, -1.0))]
+    for env in range(2):
+        for ball, (position, velocity) in enumerate(starts):
+            world.place_ball(env, position, velocity, ball=ball)
+            threaded.place_ball(env, position, velocity, ball=ball)
+            place(reference, env, ball, position, velocity)
+    rng = np.random.default_rng(3)
+    for _ in range(120):
+        buttons = rng.random((2, 2)) < 0.3
+        world.step(buttons)
+        threaded.step(buttons)
+        np.testing.assert_array_equal(threaded.ball_states, world.ball_states)
+        reference.state.flipper_command[:] = buttons[:, table.flipper_buttons]
+        step_multiball(reference)
+        np.testing.assert_array_equal(world.ball_states, reference.multi.balls)
+        np.testing.assert_array_equal(world.ball_active, reference.multi.active)
+        np.testing.assert_array_equal(world.state.flipper_angle, reference.state.flipper_angle)
+
+
+def test_launch_takes_a_ball_index():
+    table = table_from_dict(multiball_dict(), "<multiball>")
+    world = World(table, 1)
+    world.launch(0, 2.5, ball=2)
+    assert world.ball_active[0].tolist() == [True, False, True]
+    assert tuple(world.ball_states[0, 2, [BALL_X, BALL_Y]]) == table.plunger.position
+    assert world.ball_states[0, 2, BALL_VY] == 2.5
+
+
+def test_a_held_ball_stays_and_is_released_at_its_velocity():
+    world = World(level_box(saucers=(), locks=()), 1)
+    world.hold_ball(0, 1, (0.3, 0.3))
+    for _ in range(10):
+        world.step()
+    assert world.ball_held[0, 1]
+    assert world.ball_states[0, 1, :4].tolist() == [0.3, 0.3, 0.0, 0.0]
+    world.release_ball(0, 1, (0.2, 0.0))
+    world.step()
+    assert not world.ball_held[0, 1]
+    assert world.ball_states[0, 1, BALL_X] == pytest.approx(0.3 + 0.2 * DT)
+
+
+def test_a_saucer_captures_scores_holds_and_kicks_out():
+    world = World(level_box(), 1)
+    world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
+    frames = frames_until(world, lambda: world.ball_held[0, 0], 60)
+    # Captured on the first frame that ends within the radius: 0.18 m at 0.3 m/s.
+    assert frames == math.ceil(0.18 / 0.3 / DT)
+    assert world.ball_states[0, 0, :4].tolist() == [0.255, 0.50, 0.0, 0.0]
+    assert world.frame_points()[0] == 500
+    assert [c.name for c in world.frame_contacts(0)] == ["saucer"]
+    held = frames_until(world, lambda: not world.ball_held[0, 0], 100)
+    assert held == round(0.5 / DT)  # hold_time
+    assert world.ball_states[0, 0, [BALL_VX, BALL_VY]].tolist() == [1.0, 0.5]  # the kick
+    assert world.frame_points()[0] == 0
+    for _ in range(10):  # it leaves along the kick, not captured again on its way out
+        world.step()
+        assert not world.ball_held[0, 0]
+    x, y = world.ball_states[0, 0, [BALL_X, BALL_Y]]
+    assert math.atan2(y - 0.5, x - 0.255) == pytest.approx(math.atan2(0.5, 1.0))
+    assert math.hypot(*world.ball_states[0, 0, [BALL_VX, BALL_VY]]) == pytest.approx(
+        math.hypot(1.0, 0.5)
+    )
+
+
+def test_a_fast_ball_passes_over_a_saucer():
+    world = World(level_box(), 1)
+    world.place_ball(0, (0.255, 0.30), (0.0, 1.0))
+    for _ in range(30):
+        world.step()
+        assert not world.ball_held[0, 0] and world.frame_points()[0] == 0
+    assert world.ball_states[0, 0, BALL_Y] > 0.6
+
+
+def test_a_held_saucer_takes_no_second_ball_and_is_a_post_to_it():
+    world = World(level_box(saucers=({**SAUCER, "hold_time": 3.0},)), 1)
+    world.hold_ball(0, 0, (0.255, 0.50))
+    world.holder[0, 0] = world.saucer_ids[0]
+    world.place_ball(0, (0.255, 0.30), (0.0, 0.3), ball=1)
+    for _ in range(60):
+        world.step()
+        assert not world.ball_held[0, 1]
+    assert world.ball_states[0, 1, BALL_VY] < 0.0  # it bounced off the held ball
+
+
+def test_a_lock_fills_its_slots_in_order_and_releases_them():
+    world = World(level_box(), 1)
+    lock = world.lock_ids[0]
+    # Slot 1 first: not the next free slot, so a ball across it is not held.
+    world.place_ball(0, (0.30, 0.84), (-0.5, 0.0), ball=1)
+    for _ in range(30):
+        world.step()
+        assert not world.ball_held[0, 1]
+    world.place_ball(0, (0.10, 0.60), (0.0, 0.5), ball=0)
+    assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
+    assert world.ball_states[0, 0, :4].tolist() == [0.10, 0.80, 0.0, 0.0]
+    assert world.frame_points()[0] == 1000 and world.slot[0, 0] == 0
+    world.place_ball(0, (0.30, 0.84), (-0.5, 0.0), ball=1)
+    assert frames_until(world, lambda: world.ball_held[0, 1], 60) is not None
+    assert world.ball_states[0, 1, :4].tolist() == [0.10, 0.84, 0.0, 0.0]
+    assert world.slot[0, 1] == 1 and (world.holder[0, :2] == lock).all()
+    for _ in range(120):  # a lock holds until a rule releases it
+        world.step()
+    assert world.ball_held[0, :2].all()
+    assert world.release_lock(0, 0) == 2
+    assert not world.ball_held[0].any()
+    for _ in range(5):
+        world.step()
+        assert not world.ball_held[0].any()
+    assert world.ball_states[0, :2, BALL_VX].tolist() == [0.5, 0.5]
+    assert world.ball_states[0, :2, BALL_VY].tolist() == [-0.5, -0.5]
+
+
+def test_one_ball_with_a_saucer_aliases_the_one_ball_arrays():
+    world = World(level_box(balls=1), 1)
+    assert world.n_balls == 1 and world.multi is not None
+    assert not world.swept_kernel  # the game hands its frames to world.step
+    assert World(load_table("classic_v1")).swept_kernel
+    assert np.shares_memory(world.state.balls, world.multi.balls)
+    world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
+    assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
+    assert world.balls[0, :2].tolist() == [0.255, 0.50] and world.active[0]
+    copy_ = pickle.loads(pickle.dumps(world))
+    assert np.shares_memory(copy_.state.balls, copy_.multi.balls)
+
+
+def test_several_balls_on_the_multiball_table_never_overlap_or_escape():
+    table = table_from_dict(multiball_dict(), "<multiball>")
+    world = World(table, 2, num_threads=2)
+    for env in range(2):
+        world.launch(env, 2.8, ball=0)
+        world.place_ball(env, (0.25, 0.7), (0.3, -0.5), ball=1)
+        world.place_ball(env, (0.3, 0.8), (-0.2, 0.1), ball=2)
+    rng = np.random.default_rng(5)
+    r = table.ball.radius
+    for _ in range(600):
+        world.step(rng.random((2, 2)) < 0.2)
+        for env in range(2):
+            live = world.ball_states[env, world.ball_active[env]][:, :2]
+            for i in range(len(live)):
+                for j in range(i + 1, len(live)):
+                    assert math.dist(live[i], live[j]) >= 2 * r - 2 * table.simulation.skin
+            assert ((live >= 0.0) & (live <= [table.width, table.height])).all()
+
+
+pymunk = pytest.importorskip("pymunk")
+
+
+def test_pymunk_plays_several_balls_with_the_same_api():
+    from pinball_env.sim.backends import make_world
+
+    table = table_from_dict(multiball_dict(), "<multiball>")
+    world = make_world(table, 1, physics="pymunk")
+    assert world.n_balls == 3 and world.ball_states.shape == (1, 3, 5)
+    world.launch(0, 2.8, ball=0)
+    world.place_ball(0, (0.25, 0.7), (0.3, -0.5), ball=1)
+    world.place_ball(0, (0.3, 0.8), (-0.2, 0.1), ball=2)
+    r = table.ball.radius
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        world.step(rng.random((1, 2)) < 0.2)
+        live = world.ball_states[0, world.ball_active[0]][:, :2]
+        for i in range(len(live)):
+            for j in range(i + 1, len(live)):
+                assert math.dist(live[i], live[j]) >= 2 * r - 1e-3  # pymunk's slop and more
+        assert np.isfinite(world.ball_states).all()
+
+
+def test_pymunk_saucer_and_held_balls():
+    from pinball_env.sim.backends import make_world
+
+    world = make_world(level_box(saucers=({**SAUCER, "hold_time": 3.0},)), 1, physics="pymunk")
+    world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
+    assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
+    assert world.frame_points()[0] == 500
+    world.place_ball(0, (0.255, 0.20), (0.0, 0.3), ball=1)
+    for _ in range(60):  # the second ball bounces off the held one, which does not move
+        world.step()
+        assert world.ball_states[0, 0, :4].tolist() == [0.255, 0.50, 0.0, 0.0]
+        assert not world.ball_held[0, 1]
+    assert world.ball_states[0, 1, BALL_VY] < 0.0
+    world.release_ball(0, 0, (0.0, 1.0))
+    world.step()
+    assert world.ball_states[0, 0, BALL_Y] == pytest.approx(0.5 + DT, rel=1e-6)
