@@ -1,4 +1,4 @@
-"""The game's several balls (issue 49): the trough, drains, locks and the auto-plunger, for a
+"""The game's several balls: the trough, drains, locks and the auto-plunger, for a
 table whose trough holds more than one ball.
 
 The choice: such a table's frames are stepped by Python, frame by frame (the World's several-ball

@@ -1,6 +1,6 @@
 """Ball-ball contact: the swept test between two moving balls and the impulsive response.
 
-The first brick of multiball (issue 49): scalar kernels in the style of ``sweep.py``, not yet
+The first brick of multiball: scalar kernels in the style of ``sweep.py``, not yet
 called by the world step.
 
 Sweep. Two balls whose centres move from ``a`` to ``a + da`` and from ``b`` to ``b + db`` over

@@ -1,4 +1,4 @@
-"""Several balls in one env (multiball, issue 49): the frame step by swept collision with
+"""Several balls in one env (multiball): the frame step by swept collision with
 ball-ball contact, a kernel path of its own: ``sim.World`` steps a table of several balls (or
 with saucers or locks) with it; the game (``game.multiball``) serves several balls from the
 trough.

@@ -7,7 +7,7 @@ kernel, :func:`~pinball_env.physics.step_world`. :meth:`World.set_table` gives a
 its own (generated layouts): the World then steps every env on its own table in one call of
 :func:`~pinball_env.physics.step_tables`. Physics backends swap :meth:`World._advance`.
 
-Several balls (multiball, issue 49). A table whose trough holds several balls gives every env
+Several balls (multiball). A table whose trough holds several balls gives every env
 ``n_balls`` ball slots; such a table, or one with saucers or locks, is stepped by
 :func:`~pinball_env.physics.multiball.step_multiworld` (ball-ball contact, held balls), every
 other table by ``step_world`` exactly as before. Code written once for any number of balls reads

@@ -1,4 +1,4 @@
-"""Pinball-v3 (issue 49): its state rows (a block per ball), its per-ball infos, the native
+"""Pinball-v3: its state rows (a block per ball), its per-ball infos, the native
 vector env bitwise N single envs through multiballs, check_env, seeding and pickling."""
 
 import pickle

@@ -1,4 +1,4 @@
-"""The game of several balls (issue 49) on classic_v3: the trough and drains (a ball is lost only
+"""The game of several balls on classic_v3: the trough and drains (a ball is lost only
 when the last ball in play drains), locks, the multiball's start and end, its ball save, the
 jackpot lit only during a multiball, and random play that keeps every ball sound."""
 

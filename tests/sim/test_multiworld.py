@@ -1,4 +1,4 @@
-"""World with several balls (issue 49): the API, the several-ball kernel behind it, saucers and
+"""World with several balls: the API, the several-ball kernel behind it, saucers and
 locks (capture, hold time, kick, a fast ball passing over, slots filled in order, release)."""
 
 import copy

@@ -1,4 +1,4 @@
-"""The multiball's rules as data (issue 49): the triggers ``locked``, ``multiball_starts`` and
+"""The multiball's rules as data: the triggers ``locked``, ``multiball_starts`` and
 ``multiball_ends``, the effects ``release_lock``, ``add_balls`` and ``ball_save``, the ``if_lit``
 guard; their errors named as every rule's; classic_v3 round trips and compiles."""
 

@@ -1,4 +1,4 @@
-"""The multiball elements of a table description (issue 49's data): saucers, locks, the trough and
+"""The multiball elements of a table description: saucers, locks, the trough and
 the ball-ball material; their fields, ranges, placement checks and round trip, and the built-in
 tables they leave as they were. (Each documented range is refused just outside it by
 ``test_reference``, which loads this table too.)"""

@@ -695,7 +695,7 @@ def spinner_turns(speeds: list[float], seconds: float = 8.0) -> list:
     return rows
 
 
-# --- several balls (issue 49) ---------------------------------------------------------------------
+# --- several balls ---------------------------------------------------------------------
 
 # Ball-ball shots: name -> (ball a's velocity direction, ball b moving towards a too, the line of
 # centres at contact, from a to b, in degrees from a's direction).
