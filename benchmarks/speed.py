@@ -17,6 +17,8 @@ Measures, with uniformly random actions on the classic table (state observations
 - ``Pinball-v1``'s (the whole cabinet) native vector env at N = 1024 with 1 and 2 threads, and
   with 2 threads the chain stable-baselines3 steps over it (``SB3VecEnv`` under
   ``VecNormalize``: ``v1_sb3chain1024_2thread``);
+- ``Pinball-v2``'s and ``Pinball-v3``'s (multiball: classic_v3, a trough of three balls, a
+  lock and a saucer) native vector envs at N = 1024 with 2 threads, and v3's rate over v2's;
 - ``PinballProcgen-v0``'s native vector env at N = 1024 with 2 threads, each env on its own
   generated table (16 layouts, generated before the timing), with 16 rays in the observation;
 - ``CartPole-v1`` through ``gym.make`` and ``gym.make_vec("CartPole-v1", num_envs=1024)``, as
@@ -24,6 +26,10 @@ Measures, with uniformly random actions on the classic table (state observations
 - the kernel alone: microseconds per ball-frame, and nanoseconds per ball-element pair that a
   pass would sweep if it tested every solid element (as the kernel did before its candidate
   sets: the figure compares across versions);
+- the several-ball kernel alone (``physics.multiball.step_multiworld`` on classic_v3, one
+  thread): microseconds per env-frame with 1, 2 and 3 balls in play
+  (``kernel_multiball_us_per_frame_1ball``, ``_2balls``, ``_3balls``; :func:`measure_multiball`),
+  and ``ratio_kernel_3balls_to_1ball``, three balls over one on that kernel and table;
 - table generation (``tablegen_ms_per_table``, ``tablegen_targets_ms_per_table``): milliseconds
   per generated table, drawn, validated and checked for playability (``generate_table`` called
   directly, no cache), the mean over 8 (``--quick``) or 32 seeds, without and with targets;
@@ -101,6 +107,7 @@ RATIOS = (
     ("native1024_2thread", "cartpole_vec1024"),
     ("procgen1024_16layouts_2thread", "native1024_2thread"),
     ("v1_native1024_2thread", "native1024_2thread"),
+    ("v3_native1024_2thread", "v2_native1024_2thread"),
     ("v1_sb3chain1024_2thread", "v1_native1024_2thread"),
     ("single_swept", "cartpole_single"),
     ("single_swept", "single_swept_unwrapped"),
@@ -118,6 +125,9 @@ SB3_CONFIGS = {
     "sb3_dqn_scale_v2": Path("configs/agents/dqn_scale_v2.yaml"),
 }
 SB3_FIGURES = ("env_steps_per_second", "env_share", "learner_share")
+# The several-ball kernel's figures: balls in play, and the name of its figure.
+MULTIBALL_FIGURES = {n: f"kernel_multiball_us_per_frame_{n}ball{'s' if n > 1 else ''}"
+                     for n in (1, 2, 3)}  # fmt: skip
 TABLEGEN_FIGURES = ("tablegen_ms_per_table", "tablegen_targets_ms_per_table")
 # Generated tables' seeds start here (plus 1000 per --seed): seeds no test or config uses.
 TABLEGEN_SEED = 7_000_000
@@ -159,6 +169,66 @@ def measure_kernel(table: str, n_envs: int, frames: int, max_speed: float, seed:
         "kernel_us_per_ball_frame": 1e6 * seconds / ball_frames,
         "kernel_ns_per_ball_element_test": 1e9 * seconds / tests,
     }
+
+
+def measure_multiball(n_balls: int, n_envs: int, frames: int, seed: int) -> Figures:
+    """Microseconds per env-frame of the several-ball kernel (``step_multiworld``, called
+    directly, one thread) on classic_v3 with ``n_balls`` balls in play in each of ``n_envs``
+    envs, under random flipping (each button held or not, drawn anew each frame).
+
+    Each env's balls are launched from the plunger at the auto-plunger's speeds, one every 20
+    frames, and played for 100 frames in all, untimed (compiling or loading the kernel too);
+    then ``frames`` frames are timed, the kernel calls only. Between frames (untimed) a drained
+    ball, or one at rest on the plunger (the first, as the world starts it, or one that rolled
+    back), is launched as soon as no other ball lies within three radii of the plunger, so that
+    the balls stay in play (none is captured: the saucer's and lock's captures are
+    ``sim.World.step``'s, outside the kernel). Null where this version lacks the kernel or
+    classic_v3."""
+    name = MULTIBALL_FIGURES[n_balls]
+    try:
+        from pinball_env.physics.multiball import step_multiworld
+
+        table = load_table("classic_v3")
+    except (ImportError, ValueError, KeyError, FileNotFoundError, AttributeError):
+        return {name: None}
+    world = World(table, n_envs=n_envs)
+    plunger = np.asarray(table.plunger.position)
+    speeds = table.trough.auto_plunger.speed
+    rng = np.random.default_rng(seed)
+    moving = np.ones(n_envs, dtype=np.bool_)
+    args = (world.geometry, world.settings, world.state, world.scratch, world.multi,
+            world.mscratch, world.pair, moving, 0, n_envs)  # fmt: skip
+    balls, active = world.multi.balls, world.multi.active
+    reach = 3.0 * world.settings.radius
+
+    def frame() -> float:
+        world.state.flipper_command[:] = rng.random(world.state.flipper_command.shape) < 0.5
+        start = time.perf_counter()
+        faults = step_multiworld(*args)
+        seconds = time.perf_counter() - start
+        if faults:
+            raise FloatingPointError(f"{faults} env(s) with a non-finite ball state")
+        return seconds
+
+    def relaunch(balls_now: int) -> None:
+        gaps = np.hypot(*(balls[..., :2] - plunger).transpose(2, 0, 1))  # (N, M)
+        speed = np.hypot(balls[..., 2], balls[..., 3])
+        waiting = active & (gaps <= reach) & (speed < 0.1)  # at rest on the plunger
+        launched = set()  # one ball per env and frame
+        for env, ball in zip(*np.nonzero((~active | waiting)[:, :balls_now]), strict=True):
+            others = active[env] & ~waiting[env]
+            if env not in launched and (gaps[env, others] > reach).all():
+                world.launch(int(env), rng.uniform(*speeds), int(ball))
+                launched.add(env)
+
+    for warmup in range(100):
+        relaunch(min(n_balls, warmup // 20 + 1))
+        frame()
+    seconds = 0.0
+    for _ in range(frames):
+        relaunch(n_balls)
+        seconds += frame()
+    return {name: 1e6 * seconds / (n_envs * frames)}
 
 
 def measure_tablegen(count: int, seed: int) -> Figures:
@@ -362,6 +432,9 @@ def measurements(quick: bool, seed: int) -> list[tuple[str, Callable[[], float |
     for threads in (1, 2):  # the whole cabinet: plunger, nudges (random ones tilt), the bob
         figures.append((f"v1_native1024_{threads}thread",
                         lambda t=threads: native(1024, t, env_id="Pinball-v1")))  # fmt: skip
+    for version in ("v2", "v3"):  # v3: multiball (classic_v3: a trough of 3 balls, a lock)
+        figures.append((f"{version}_native1024_2thread",
+                        lambda v=version: native(1024, 2, env_id=f"Pinball-{v}")))  # fmt: skip
     # The same as stable-baselines3 steps it: SB3VecEnv and VecNormalize over it.
     figures.append(("v1_sb3chain1024_2thread", lambda: sb3_chain_steps_per_second(
         1024, 2, "Pinball-v1", steps(300), seed)))  # fmt: skip
@@ -393,8 +466,11 @@ def groups(quick: bool, seed: int) -> list[tuple[str, Callable[[], Figures]]]:
 
     n_envs, frames = (256, 20) if quick else (1024, 300)
     found = [(name, rate(name, measure)) for name, measure in measurements(quick, seed)]
+    found.append(("kernel", lambda: measure_kernel("classic", n_envs, frames, 10.0, seed)))
+    for n, name in MULTIBALL_FIGURES.items():  # kernel_multiball_1ball, _2balls, _3balls
+        group = f"kernel_multiball_{name.rsplit('_', 1)[1]}"
+        found.append((group, lambda n=n: measure_multiball(n, n_envs, 3 * frames, seed)))
     found += [
-        ("kernel", lambda: measure_kernel("classic", n_envs, frames, 10.0, seed)),
         ("tablegen", lambda: measure_tablegen(8 if quick else 32, seed)),
         *[(prefix, lambda p=prefix: measure_sb3(p, 2 if quick else 8)) for prefix in SB3_CONFIGS],
         ("startup_warm", lambda: {"startup_warm_seconds": startup_seconds(cold=False)}),
@@ -428,6 +504,9 @@ def finish(figures: Figures, quick: bool) -> dict:
         result[f"ratio_{numerator}_to_{denominator}"] = divide(
             rate.get(numerator), rate.get(denominator)
         )
+    result["ratio_kernel_3balls_to_1ball"] = divide(
+        figures.get(MULTIBALL_FIGURES[3]), figures.get(MULTIBALL_FIGURES[1])
+    )
     result["machine"] = f"{platform.machine()}, {os.cpu_count()} cores"
     result["quick"] = quick
     return result
@@ -528,7 +607,8 @@ def parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     parser.add_argument(
         "--only", nargs="+", metavar="NAME",
-        help="only these measurements (v1_sb3chain1024_2thread, sb3_ppo, kernel, ...)",
+        help="only these measurements (v1_sb3chain1024_2thread, sb3_ppo, kernel, "
+        "kernel_multiball_3balls, v3_native1024_2thread, ...)",
     )  # fmt: skip
     parser.add_argument("--worker", metavar="NAME", help=argparse.SUPPRESS)
     parser.add_argument("--json-out", type=Path, help=argparse.SUPPRESS)

@@ -8,6 +8,7 @@ Examples::
     python -m pinball_env.tools.plot --gallery --difficulty hard --seeds 0 12 --out gallery.png
     python -m pinball_env.tools.plot classic_v1 --cabinet --out docs/cabinet.png
     python -m pinball_env.tools.plot classic_v1 --rules --out docs/rules.png
+    python -m pinball_env.tools.plot classic_v3 --multiball --out docs/multiball.png
     python -m pinball_env.tools.plot --tilt classic_v1 classic_v2 --out docs/tilt.png
 
 Needs matplotlib (the ``plot`` extra).
@@ -221,6 +222,101 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
     return out
 
 
+# plot_multiball: the seeds it tries for a game with a multiball, how long into a stretch of
+# the most balls in play it takes the frame (the balls out of the shooter lane by then), and
+# how long it plays on after the first multiball ends (the heuristic's games last many minutes).
+MULTIBALL_TRIES = 10
+MULTIBALL_SETTLE_FRAMES = 45
+MULTIBALL_TAIL_FRAMES = 600
+
+
+def multiball_game(
+    table: Table, seed: int, max_frames: int | None = None
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """A heuristic game on ``table`` (seed ``seed``) up to ``MULTIBALL_TAIL_FRAMES`` steps
+    after its first multiball ends (or its end; at most ``max_frames`` steps): the time, score,
+    balls in play and locked, and whether a multiball runs, step by step; and the frame as the
+    renderer draws it with the most balls in play (``MULTIBALL_SETTLE_FRAMES`` into the first
+    stretch of that many where it lasts: the balls out of the shooter lane)."""
+    from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
+    from pinball_env.players import HeuristicPolicy
+
+    env = PinballEnv(table=table, render_mode="rgb_array")
+    policy = HeuristicPolicy(table)
+    _, info = env.reset(seed=seed)
+    rate = table.simulation.frame_rate
+    trace: dict[str, list] = {"time": [], "score": [], "in_play": [], "locked": [],
+                              "multiball": []}  # fmt: skip
+    best, since, frame = -1, 0, env.render()
+    done, seen, tail = False, False, -1  # tail: the steps since the first multiball ended
+    while not done and tail < MULTIBALL_TAIL_FRAMES:
+        if max_frames is not None and len(trace["time"]) >= max_frames:
+            break
+        _, _, terminated, truncated, info = env.step(policy(info))
+        done = terminated or truncated
+        in_play = int(np.sum(info["balls_in_play"]))
+        for key, value in (("time", info["frames"] / rate), ("score", info["score"]),
+                           ("in_play", in_play), ("locked", info["balls_locked"]),
+                           ("multiball", info["multiball"])):  # fmt: skip
+            trace[key].append(value)
+        seen = seen or info["multiball"]
+        if tail >= 0 or (seen and not info["multiball"]):
+            tail += 1
+        since = since + 1 if in_play == best else 0
+        if in_play > best or (in_play == best and since == MULTIBALL_SETTLE_FRAMES):
+            best, frame = in_play, env.render()
+    env.close()
+    return {key: np.array(values) for key, values in trace.items()}, frame
+
+
+def plot_multiball(
+    table: Table, out: Path, seed: int = 0, max_frames: int | None = None,
+    tries: int = MULTIBALL_TRIES,
+) -> Path:  # fmt: skip
+    """Write a PNG of a heuristic game on ``table`` (one with a trough of several balls) that
+    starts a multiball (the first of seeds ``seed`` to ``seed + tries - 1`` that does; the last
+    one tried otherwise), until a while after its first multiball (:func:`multiball_game`): the
+    frame with the most balls in play (the lock, the saucer, every ball, as the renderer draws
+    them), and the score over the game with the balls in play and the multiballs marked.
+    ``max_frames`` caps each game's steps (for tests)."""
+    if table.n_balls < 2:
+        raise ValueError(f"table {table.name!r} has one ball: no multiball")
+    plt = _pyplot()
+    for game_seed in range(seed, seed + tries):
+        trace, frame = multiball_game(table, game_seed, max_frames)
+        if trace["multiball"].any():
+            break
+    times, multiball = trace["time"], trace["multiball"]
+    fig = plt.figure(figsize=(10, 6.2))
+    grid = fig.add_gridspec(1, 2, width_ratios=(1, 1.5))
+    ax = fig.add_subplot(grid[0, 0])
+    ax.imshow(frame)
+    ax.set_axis_off()
+    ax.set_title(f"{trace['in_play'].max(initial=0)} balls in play", fontsize=9)
+    ax = fig.add_subplot(grid[0, 1])
+    starts = np.flatnonzero(np.diff(np.concatenate([[False], multiball, [False]]).astype(int)))
+    for k, (first, last) in enumerate(zip(starts[::2], starts[1::2], strict=True)):
+        ax.axvspan(times[first], times[min(last, len(times) - 1)], color="#e76f51", alpha=0.2,
+                   lw=0, label="multiball" if k == 0 else None)  # fmt: skip
+    ax.plot(times, trace["score"], color="#1d3557", label="score")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("points")
+    twin = ax.twinx()
+    twin.step(times, trace["in_play"], color="#2a9d8f", lw=0.8, where="post", alpha=0.8)
+    twin.step(times, trace["locked"], color="#f4a261", lw=0.8, where="post", alpha=0.8, ls="--")
+    twin.set_ylabel("balls in play (green), locked (orange)")
+    twin.set_ylim(-0.2, table.n_balls + 0.5)
+    ax.legend(fontsize=8, loc="upper left")
+    score = int(trace["score"][-1]) if len(times) else 0
+    ax.set_title(f"the heuristic's game on {table.name} (seed {game_seed}), its first "
+                 f"{times[-1]:.0f} s: {score} points", fontsize=9)  # fmt: skip
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=80, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
 def plot_cabinet(table: Table, out: Path) -> Path:
     """Write a PNG of the cabinet at work on ``table`` (one with a cabinet): the skill shot's
     plunge beside a whole stroke, one nudge (the cabinet's offset and the ball's velocity
@@ -372,6 +468,10 @@ def main(argv: list[str] | None = None) -> Path:
         "--rules", action="store_true", help="a heuristic game: the rules' lights and score"
     )
     parser.add_argument(
+        "--multiball", action="store_true",
+        help="a heuristic game with a multiball: its most balls in play and the score",
+    )  # fmt: skip
+    parser.add_argument(
         "--difficulty", choices=DIFFICULTIES, default="easy", help="of the gallery's tables"
     )
     parser.add_argument(
@@ -389,6 +489,10 @@ def main(argv: list[str] | None = None) -> Path:
         return out
     if args.rules:
         out = plot_rules(load_any_table(args.table), args.out)
+        print(f"wrote {out}")
+        return out
+    if args.multiball:
+        out = plot_multiball(load_any_table(args.table), args.out)
         print(f"wrote {out}")
         return out
     if args.tilt:

@@ -24,6 +24,10 @@ def test_benchmark_prints_and_writes_its_figures(tmp_path, capsys):
         "ratio_native1024_2thread_to_sync8_pymunk",
         "v1_native1024_2thread_steps_per_second",
         "ratio_v1_native1024_2thread_to_native1024_2thread",
+        "v3_native1024_2thread_steps_per_second",
+        "ratio_v3_native1024_2thread_to_v2_native1024_2thread",
+        *speed.MULTIBALL_FIGURES.values(),
+        "ratio_kernel_3balls_to_1ball",
         "tablegen_ms_per_table",
         "tablegen_targets_ms_per_table",
         "sb3_ppo_env_steps_per_second",
@@ -50,3 +54,20 @@ def test_benchmark_measures_only_what_it_is_asked(capsys):
     with pytest.raises(SystemExit):
         speed.main(["--quick", "--only", "no_such_measurement"])
     assert "no measurement no_such_measurement (there are: " in capsys.readouterr().err
+
+
+def test_multiball_kernel_figure_keeps_its_balls_in_play(monkeypatch):
+    from pinball_env.physics import multiball
+
+    step, in_play = multiball.step_multiworld, []
+
+    def counted(*args):
+        faults = step(*args)
+        in_play.append(int(args[4].active.sum()))
+        return faults
+
+    monkeypatch.setattr(multiball, "step_multiworld", counted)
+    figures = speed.measure_multiball(3, 8, 20, 0)
+    assert figures[speed.MULTIBALL_FIGURES[3]] > 0
+    assert len(in_play) == 120  # 100 untimed frames, then 20
+    assert min(in_play[-20:]) >= 8 * 3 - 2  # a drained ball is launched again at once

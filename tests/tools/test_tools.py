@@ -36,6 +36,17 @@ def test_draw_shows_the_cabinet_at_work(tmp_path):
         plot.main(["classic", "--cabinet", "--out", str(tmp_path / "none.png")])
 
 
+def test_draw_shows_a_multiball(tmp_path):
+    from pinball_env.table import load_table
+
+    # 2500 steps (42 s): seed 0's first multiball starts at 40 s; the test stops there.
+    out = plot.plot_multiball(load_table("classic_v3"), tmp_path / "mb.png", max_frames=2500,
+                              tries=1)  # fmt: skip
+    assert out.read_bytes()[:4] == b"\x89PNG" and out.stat().st_size > 20_000
+    with pytest.raises(ValueError, match="one ball"):
+        plot.main(["classic_v2", "--multiball", "--out", str(tmp_path / "none.png")])
+
+
 def test_the_tools_run_as_modules_of_pinball_env_tools():
     for name in ("demo", "plot", "crosscheck", "play", "tilt"):
         assert importlib.util.find_spec(f"pinball_env.tools.{name}") is not None, name
