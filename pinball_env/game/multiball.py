@@ -57,6 +57,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 
 from pinball_env.game.parameters import ball_search_frames
 from pinball_env.physics.columns import BALL_X, BALL_Y
@@ -247,33 +248,20 @@ class Multiball:
         ``tilted``; tilted, the game's ball too once it has lain still as long (where another
         ball is in play; the last, the loop gives up)."""
         state, world = self.game.state, self.game.world
-        balls, anchor, still = world.ball_states[env], state.ball_anchor[env], state.ball_still[env]
-        playing = self.playing(env)
-        free = playing & ~world.ball_held[env]
         game_ball = int(self._watching[env])
-        for ball in range(self.n_balls):
-            if ball == game_ball:
-                continue
-            x, y = balls[ball, BALL_X], balls[ball, BALL_Y]
-            dx, dy = x - anchor[ball, 0], y - anchor[ball, 1]
-            if not free[ball] or dx * dx + dy * dy > self.radius2:
-                anchor[ball] = x, y
-                still[ball] = 0
-                continue
-            still[ball] += 1
-            if still[ball] >= self.search_frames:
-                world.ball_active[env, ball] = False  # back to the trough ...
-                still[ball] = 0
-                if not tilted:
-                    state.pending_balls[env] += 1  # ... and served again
-        others = self.playing(env)
-        if game_ball >= 0:
-            others[game_ball] = False
+        first, end = self._locks
+        stuck, playing = search_balls(
+            world.ball_states[env], world.ball_active[env], world.ball_held[env],
+            world.holder[env], first, end, state.ball_anchor[env], state.ball_still[env],
+            game_ball, self.radius2, self.search_frames,
+        )  # fmt: skip
+        if stuck and not tilted:
+            state.pending_balls[env] += stuck  # served again
         if (
             tilted
             and game_ball >= 0
-            and free[game_ball]
-            and others.any()
+            and playing > 1
+            and not world.ball_held[env, game_ball]
             and state.still_frames[env] >= self.search_frames
         ):
             world.ball_active[env, game_ball] = False  # given up; another is the game's ball
@@ -341,6 +329,37 @@ class Multiball:
         xy = world.ball_states[env][:, [BALL_X, BALL_Y]]
         near = np.hypot(*(xy - self.plunger).T) < self.lane_clear
         return not (near & world.ball_active[env]).any()
+
+
+@njit(cache=True)
+def search_balls(balls, active, held, holder, first, end, anchor, still, game_ball, r2, frames):
+    """The ball search of one env's balls (``balls`` (M, 5), ``active``, ``held``, ``holder``
+    (M,); its locks' element ids ``first`` to ``end``) but ``game_ball`` (the loop's; -1:
+    none): each ball in play and free (not held) that is within ``sqrt(r2)`` of its ``anchor``
+    (M, 2) counts a frame more in ``still`` (M,), else its anchor is where it is; one that has
+    counted ``frames`` goes back to the trough (``active`` cleared). Returns the balls sent back
+    and the balls in play (not locked) left, the game's ball included."""
+    stuck = playing = 0
+    for ball in range(balls.shape[0]):
+        locked = held[ball] and first <= holder[ball] < end
+        in_play = active[ball] and not locked
+        x, y = balls[ball, BALL_X], balls[ball, BALL_Y]
+        if ball == game_ball:
+            playing += in_play
+            continue
+        dx, dy = x - anchor[ball, 0], y - anchor[ball, 1]
+        if not in_play or held[ball] or dx * dx + dy * dy > r2:
+            anchor[ball, 0], anchor[ball, 1] = x, y
+            still[ball] = 0
+        else:
+            still[ball] += 1
+            if still[ball] >= frames:
+                active[ball] = False
+                still[ball] = 0
+                stuck += 1
+                in_play = False
+        playing += in_play
+    return stuck, playing
 
 
 __all__ = ["LANE_CLEAR", "Multiball"]
