@@ -5,7 +5,8 @@ every env at once (the single env is a batch of one).
   in slot order, with its flag: in play 1, held 0.5, in the trough 0); each flipper's angle
   above rest and angular velocity towards up; ball in play; balls left (in table units, or
   normalised to the table so that they mean the same on every table); the cabinet's and the
-  rules' rows where the table has them, and optionally ray distances (``physics.rays``). Its
+  rules' rows where the table has them, and optionally ray distances (``physics.rays``; with
+  several balls they also see the other balls and the standing drop targets). Its
   :meth:`StateObserver.rows` declare every entry once (:class:`ObservationRow`: meaning,
   bounds, unit), from which the space's bounds and the documentation's tables are made;
 - :class:`ImageObserver`: the table drawn as an RGB or grayscale picture.
@@ -30,7 +31,7 @@ from pinball_env.physics.columns import (
     CABINET_Y,
     SPIN_ANGLE,
 )
-from pinball_env.physics.rays import RAY_RANGE, cast_all_rays
+from pinball_env.physics.rays import RAY_RANGE, cast_all_rays, cast_all_rays_seeing
 from pinball_env.render import Renderer, TargetsView
 from pinball_env.sim.tables import flipper_numbers
 from pinball_env.table import Table
@@ -74,7 +75,9 @@ class StateObserver:
     ``normalised``: positions in table widths and heights, flipper angles in swings and angular
     velocities in top speeds, so that the bounds are the same on every table (generated
     tables); else in metres and radians, within the bounds of ``game.table``. ``rays``: that
-    many ray distances after the state, in ``RAY_RANGE`` (0-1).
+    many ray distances after the state, in ``RAY_RANGE`` (0-1), from the game's ball to the
+    walls, posts and flippers; on a table of several balls also to the other balls (in play
+    or held) and the standing drop targets (``physics.rays.cast_all_rays_seeing``).
     """
 
     def __init__(self, game: Game, normalised: bool = False, rays: int = 0) -> None:
@@ -152,10 +155,12 @@ class StateObserver:
                 (f"end-of-ball bonus, in thousands (clipped to {MAX_OBS_BONUS:g})", 0.0,
                  MAX_OBS_BONUS, "1000 points"),
             ]  # fmt: skip
+        # Several balls: the rays also see the other balls and the standing drop targets.
+        sees = ", seeing other balls and standing drop targets" if self.game.multi else ""
         for k in range(self.rays):  # as ray_directions: evenly round the circle from +x
             direction = 360.0 * k / self.rays
-            rows.append((f"ray {k} distance (direction {direction:.4g} deg from +x)", 0.0, 1.0,
-                         f"{RAY_RANGE:g} m"))  # fmt: skip
+            rows.append((f"ray {k} distance (direction {direction:.4g} deg from +x{sees})", 0.0,
+                         1.0, f"{RAY_RANGE:g} m"))  # fmt: skip
         # The bounds as the float32 space holds them, so that a row is exactly the space's.
         return tuple(
             ObservationRow(meaning, float(np.float32(low)), float(np.float32(high)), unit)
@@ -203,7 +208,12 @@ class StateObserver:
         if self.rays:
             args = (state.balls, tables.geometries(), state.flipper_angle, self.rays,
                     state.hits.shape[1], self._ray_distances)  # fmt: skip
-            world.threads.run(cast_all_rays, world.n_envs, *args)
+            if self.game.multi is None:
+                world.threads.run(cast_all_rays, world.n_envs, *args)
+            else:  # several balls: the rays also see the other balls and the standing targets
+                seeing = (world.ball_states, world.ball_active, self.game.table.ball.radius,
+                          state.targets_up)  # fmt: skip
+                world.threads.run(cast_all_rays_seeing, world.n_envs, *args, *seeing)
             obs = np.concatenate([obs, self._ray_distances], axis=1)
         return obs
 

@@ -12,7 +12,8 @@ from pinball_env.table import Table
 
 # Ball search: a ball in play that has not moved a ball radius in this long [s] (resting in the
 # shooter lane, say, or held in a flipper's cradle) is served again from the plunger, as a real
-# machine's ball search and auto-plunger would; no ball is lost. So every game can end.
+# machine's ball search and auto-plunger would; no ball is lost. So every game can end. With
+# several balls every ball in play is watched (game.multiball).
 BALL_SEARCH_TIME = 10.0
 # Most frames one step runs on with the buttons released while the ball is high (skip_above),
 # after its frame_skip frames: then the agent is asked again, wherever the ball is.

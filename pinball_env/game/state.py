@@ -81,6 +81,10 @@ class GameState(NamedTuple):
     multiball_events: np.ndarray  # (N, 2) int64: the frame's multiball starts and ends
     multiballs: np.ndarray  # (N,) int64: multiballs started in the current game
     lock_release: np.ndarray  # (N, K) bool: the rules released lock k in the frame
+    # The ball search of every ball slot (game.multiball): where each ball last moved a radius
+    # from, and frames since (the game's ball's own clock is ``anchor``/``still_frames``).
+    ball_anchor: np.ndarray  # (N, M, 2) float64 [m]
+    ball_still: np.ndarray  # (N, M) int64
 
 
 def make_game_state(
@@ -148,6 +152,8 @@ def make_game_state(
         multiball_events=zeros(2),
         multiballs=zeros(),
         lock_release=zeros(n_locks, dtype=bool),
+        ball_anchor=zeros(slots.balls.shape[1] if slots else 0, 2, dtype=np.float64),
+        ball_still=zeros(slots.balls.shape[1] if slots else 0),
     )
 
 
@@ -167,7 +173,8 @@ def clear_game(
     state.frames[env] = 0
     state.pressed[env] = False
     for array in (state.pending_balls, state.multiball, state.multiball_save,
-                  state.multiball_events, state.multiballs, state.lock_release):  # fmt: skip
+                  state.multiball_events, state.multiballs, state.lock_release,
+                  state.ball_anchor, state.ball_still):  # fmt: skip
         array[env] = 0
     state.ball_slot[env] = -1
     if lights is not None:

@@ -184,3 +184,121 @@ def test_random_play_keeps_every_ball_sound(seed):
             for j in range(i):
                 assert np.hypot(*(xy[i] - xy[j])) >= 2 * r - skin - 1e-9
         assert (np.abs(balls[active][:, [BALL_VX, BALL_VY]]) < 100.0).all()
+
+
+# --- the ball search and the tilt watch every ball -----------------------------------------
+
+# Balls put back at these places (at rest) before each frame: MOVING's by turns, 5 cm apart (the
+# ball moves a radius every frame), STUCK's the same (it never moves a radius).
+MOVING = ((0.25, 0.9), (0.25, 0.95))
+STUCK = ((0.15, 0.6),)
+
+
+def two_balls_in_play(seed=0):
+    """Slot 0 (the game's ball) and slot 1 in play, nothing queued."""
+    game, rng = new_game(MOVING[0], seed=seed)
+    game.world.place_ball(0, STUCK[0], ball=1)
+    game.multi.sync(0)
+    assert game.state.ball_slot[0] == 0 and in_play(game) == 2
+    return game, rng
+
+
+def play_pinned(game, rng, pins, until, limit):
+    """Step, each ball of ``pins`` (slot -> places) put back at its places by turns, at rest,
+    before each frame while it is in play, until ``until()``; returns the frames played."""
+    world = game.world
+    for frame in range(limit):
+        if until():
+            return frame
+        for ball, places in pins.items():
+            if world.ball_active[0, ball] and not world.ball_held[0, ball]:
+                world.place_ball(0, places[frame % len(places)], ball=ball)
+        game.step(NOOP, [rng])
+    raise AssertionError("never happened")
+
+
+def test_a_stuck_ball_that_is_not_the_games_ball_goes_back_to_the_trough_and_is_served_again():
+    game, rng = two_balls_in_play()
+    search = game.multi.search_frames
+    pins = {0: MOVING, 1: STUCK}
+    frames = play_pinned(game, rng, pins, lambda: not game.world.ball_active[0, 1], 2 * search)
+    assert search <= frames <= search + 2
+    assert game.state.balls_left[0] == 3 and game.world.ball_active[0, 0]  # none lost
+    assert game.state.pending_balls[0] == 1  # served again: queued for the auto-plunger
+    assert not game.state.multiball_events[0, 1]  # two balls still count: no multiball end
+    game.step(NOOP, [rng])  # the auto-plunger launches it up the shooter lane
+    assert in_play(game) == 2 and game.state.pending_balls[0] == 0
+    launched = game.world.ball_states[0, 1]
+    assert launched[BALL_X] == TABLE.plunger.position[0] and launched[BALL_VY] > 0.0
+
+
+def test_a_stuck_ball_that_becomes_the_games_ball_keeps_its_clock():
+    """Ball 1 lies still while ball 0 plays; ball 0 leaves play halfway: the game's ball is
+    now ball 1, and the loop's ball search serves it again when its whole wait is up."""
+    game, rng = two_balls_in_play()
+    search = game.multi.search_frames
+    half = search // 2
+    pins = {0: MOVING, 1: STUCK}
+    start = game.state.frames[0]
+    play_pinned(game, rng, pins, lambda: game.state.frames[0] - start >= half, search)
+    game.world.ball_active[0, 0] = False  # ball 0 goes back to the trough (as if drained)
+    game.state.multiball_save[0] = 0
+    pins = {1: STUCK}
+    served = lambda: game.world.ball_states[0, 1, BALL_X] == TABLE.plunger.position[0]  # noqa: E731
+    play_pinned(game, rng, pins, served, search)
+    assert search <= game.state.frames[0] - start <= search + 3  # not half + search
+    assert game.state.ball_slot[0] == 1 and game.state.balls_left[0] == 3
+
+
+def test_a_tilt_gives_up_every_ball_in_play_loses_the_ball_once_and_keeps_the_locked_ball():
+    game, rng = new_game(LOCK.slots[0])
+    step_until(game, rng, lambda: locked(game).sum() == 1 and in_play(game) == 1)
+    game.state.pending_balls[0] = 1  # a second ball in play: a multiball (its ball save runs)
+    step_until(game, rng, lambda: in_play(game) == 2)
+    assert game.state.multiball[0]
+    game.state.world.tilted[0] = True  # the machine tilts (as the plumb bob's warnings would)
+    balls_left, held = [], [1]
+    for _ in range(20000):
+        game.step(NOOP, [rng])
+        balls_left.append(int(game.state.balls_left[0]))
+        held.append(int(locked(game).sum()))
+        assert held[-1] >= held[-2]  # none let go from the lock (it may take one more)
+        if balls_left[-1] < 3:
+            break
+        # Tilted: no ball is served or saved.
+        assert game.state.pending_balls[0] == 0 and game.state.multiball_save[0] == 0
+    # Lost once, when the last ball in play was gone; the locked balls stay locked.
+    assert balls_left[-1] == 2 and balls_left.count(2) == 1
+    assert in_play(game) == 0 and locked(game).sum() == held[-1] >= 1
+    assert game.state.on_plunger[0] and not game.state.world.tilted[0]  # the next ball waits
+    game.step(NOOP, [rng])
+    assert game.state.balls_left[0] == 2 and locked(game).sum() == held[-1]
+
+
+def test_tilted_a_ball_that_lies_still_is_given_up_and_not_served_again():
+    game, rng = two_balls_in_play()
+    game.state.multiball_save[0] = 0
+    game.state.world.tilted[0] = True
+    search = game.multi.search_frames
+    # The other ball lies still: given up (back to the trough), nothing queued.
+    pins = {0: MOVING, 1: STUCK}
+    frames = play_pinned(game, rng, pins, lambda: not game.world.ball_active[0, 1], 2 * search)
+    assert search <= frames <= search + 2
+    assert game.state.pending_balls[0] == 0 and game.state.balls_left[0] == 3
+    # The game's ball lies still too: given up where it lies, and the ball is lost, once.
+    pins = {0: STUCK}
+    play_pinned(game, rng, pins, lambda: game.state.balls_left[0] < 3, 2 * search)
+    assert game.state.balls_left[0] == 2 and game.world.ball_active[0].sum() == 0
+
+
+def test_tilted_the_games_ball_lying_still_is_given_up_while_another_plays_on():
+    game, rng = two_balls_in_play()
+    game.state.multiball_save[0] = 0
+    game.state.world.tilted[0] = True
+    search = game.multi.search_frames
+    pins = {0: STUCK, 1: ((0.3, 0.9), (0.3, 0.95))}
+    frames = play_pinned(game, rng, pins, lambda: not game.world.ball_active[0, 0], 2 * search)
+    assert search <= frames <= search + 2
+    # Ball 1 plays on as the game's ball; no ball lost, none queued.
+    assert game.state.ball_slot[0] == 1 and game.state.world.active[0]
+    assert game.state.balls_left[0] == 3 and game.state.pending_balls[0] == 0
