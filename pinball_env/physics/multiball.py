@@ -132,7 +132,7 @@ from pinball_env.physics.sweep import INF, norm, point_segment_distance
 from pinball_env.physics.targets import (
     count_kickbacks,
     kickback_crossing,
-    record_crossings,
+    record_near_crossings,
     sensor_crossing,
     spin_spinner,
     sweep_drop_targets,
@@ -403,7 +403,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     reach2 = 2.0 * r
     segments, bounds = geometry.segments, geometry.segment_bounds
     one_sided, circles = geometry.segment_one_sided, geometry.circles
-    flippers, sensors = geometry.flippers, geometry.sensors
+    flippers = geometry.flippers
     n_flippers = flippers.shape[0]
     gravity = norm(settings.gravity_x, settings.gravity_y)
     balls, active, fixed = multi.balls[env], multi.active[env], multi.held[env]
@@ -562,24 +562,18 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 nr, ne = near[i], near_ends[i]
                 if n_lines > 0:
                     cross_lines(state, env, geometry, x, y, vx, vy, dt, k * h + elapsed)
-                crossed = False
-                for s in range(ne[NEAR_DROP_TARGETS], ne[NEAR_SENSORS]):
-                    if sensor_crossing(x, y, vx * dt, vy * dt, sensors[nr[s]]) < INF:
-                        crossed = True
-                        break
-                if crossed:
-                    drain = record_crossings(
-                        state, env, geometry, x, y, vx * dt, vy * dt, k * h + elapsed, dt,
-                        scratch.crossings[env],
-                    )  # fmt: skip
-                    if drain < INF:
-                        balls[i, BALL_X] = x + vx * dt * drain
-                        balls[i, BALL_Y] = y + vy * dt * drain
-                        active[i] = False
-                        work[i, W_MOVING] = 0.0
-                        work[i, W_CHECK] = 0.0
-                        moving -= 1
-                        continue
+                drain = record_near_crossings(
+                    state, env, geometry, x, y, vx * dt, vy * dt, k * h + elapsed, dt,
+                    scratch.crossings[env], nr, ne[NEAR_DROP_TARGETS], ne[NEAR_SENSORS],
+                )  # fmt: skip
+                if drain < INF:
+                    balls[i, BALL_X] = x + vx * dt * drain
+                    balls[i, BALL_Y] = y + vy * dt * drain
+                    active[i] = False
+                    work[i, W_MOVING] = 0.0
+                    work[i, W_CHECK] = 0.0
+                    moving -= 1
+                    continue
                 balls[i, BALL_X] = x + vx * dt
                 balls[i, BALL_Y] = y + vy * dt
             remaining -= dt

@@ -182,6 +182,18 @@ def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossi
 
 
 @njit(cache=True)
+def record_near_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings, near,
+                          first, end):  # fmt: skip
+    """:func:`record_crossings` of the move, after a cheap test that rules out the common case:
+    where the ball crosses none of the sensors ``near[first:end]`` (its candidate set's), it
+    crosses none; returns inf then."""
+    for i in range(first, end):
+        if sensor_crossing(x, y, dx, dy, geometry.sensors[near[i]]) < INF:
+            return record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings)
+    return INF
+
+
+@njit(cache=True)
 def kickback_crossing(x, y, vx, vy, duration, kickbacks, lit):
     """The first lit kickback whose line the ball moving at (vx, vy) from (x, y) for
     ``duration`` seconds crosses against its kick, and the fraction of the move where:
