@@ -656,7 +656,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     ball[BALL_X], ball[BALL_Y] = x, y
     ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
     if has_targets:
-        update_targets(geometry, state, env, x, y, r, settings.dt)
+        update_targets(geometry, state, env, state.balls[env : env + 1],
+                       state.active[env : env + 1], r, settings.dt)  # fmt: skip
     return math.isfinite(x + y + vx + vy + spin)
 
 
