@@ -1,0 +1,309 @@
+"""The game in a browser: ``python -m pinball_env.tools.serve``, then open http://localhost:8000.
+
+A local web server (the ``web`` extra: Starlette on uvicorn) whose page draws the game on a
+canvas from the table's geometry (sent once) and the state of every frame (streamed over a
+WebSocket at the game's frame rate, 60 per second; ``pinball_env.tools.web``). Nothing to
+install on the viewer's side; from a machine without a screen, forward the port::
+
+    ssh -L 8000:localhost:8000 trainer   # then, there: python -m pinball_env.tools.serve
+
+Modes (each page its own session, stepped on the server at real speed):
+
+- play (the default): ``[--env ID] [--table NAME] [--seed S] [--protocol] [--record FILE]``, as
+  the play tool: its keys (Left Shift / Z / Left arrow, Right Shift / M / Right arrow, Down /
+  Enter the plunger, X / N / Up / B the nudges, P / Space pause, R restart) or the page's touch
+  buttons; with ``--record`` every page's ended games are written to FILE in the play tool's
+  format (``pinball_env.recording``), which ``python -m agents.evaluate --recording FILE``
+  scores on the protocol;
+- watch: ``--watch heuristic [--games N]`` (the scripted player, N games side by side);
+  ``python -m agents.serve --model RUN_OR_ZIP`` watches a trained agent the same way;
+- replay: ``--replay FILE``: a recording, checked first (another version's, or one that does not
+  replay as recorded, is refused), on a timeline: play, pause, step, scrub, speed.
+
+Safe by default: it listens on 127.0.0.1 unless ``--host`` says otherwise, serves its page and
+the state only, takes WebSockets from its own page only (the Origin is checked), at most
+``--max-viewers`` pages at once; each page's send queue holds one frame (a slow page skips
+frames) and a few other messages; a malformed message from a page gets an error back.
+"""
+
+import argparse
+import asyncio
+import contextlib
+import json
+import sys
+from collections import deque
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit
+
+import gymnasium as gym
+
+from pinball_env import ENVS
+from pinball_env.players import HeuristicPolicy
+from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
+from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
+from pinball_env.recording import ENV_IDS as RECORDED_ENV_IDS
+from pinball_env.recording import (
+    RecordingError,
+    default_table,
+    load_recording,
+    make_recorded_env,
+)
+from pinball_env.tools.web.sessions import (
+    Message,
+    Player,
+    PlaySession,
+    Recorder,
+    ReplayIndex,
+    ReplaySession,
+    Session,
+    WatchSession,
+    error,
+)
+
+HOST = "127.0.0.1"  # this machine only; --host 0.0.0.0 opens it to the network
+PORT = 8000
+MAX_VIEWERS = 8  # pages at once: each has its own game
+MAX_QUEUED = 32  # messages other than frames waiting for a slow page (the oldest dropped)
+MAX_LATE_FRAMES = 6  # a tick this late skips ahead rather than stepping to catch up
+STATIC = Path(__file__).resolve().parent / "web" / "static"
+ENV_IDS = tuple(env_id for env_id in ENVS if env_id.startswith("Pinball-v"))  # v0 to v3
+NEEDS_WEB = 'the browser page needs the web extra, pip install "pinball-env[web]"'
+WATCHERS = ("heuristic",)  # the players --watch names
+
+SessionFactory = Callable[[], Session]
+
+
+class Outbox:
+    """A page's send queue: the newest frame (a frame not yet sent when the next comes is
+    dropped) and at most ``limit`` other messages."""
+
+    def __init__(self, limit: int = MAX_QUEUED) -> None:
+        self.frame: Message | None = None
+        self.others: deque[Message] = deque(maxlen=limit)
+        self.ready = asyncio.Event()
+        self.dropped = 0  # frames never sent
+
+    def put(self, message: Message) -> None:
+        if message["type"] == "frame":
+            self.dropped += self.frame is not None
+            self.frame = message
+        else:
+            self.others.append(message)
+        self.ready.set()
+
+    async def get(self) -> Message:
+        while not (self.others or self.frame):
+            self.ready.clear()
+            await self.ready.wait()
+        if self.others:
+            return self.others.popleft()
+        frame, self.frame = self.frame, None
+        return frame
+
+
+def encode(message: Message) -> str:
+    """A message as the page receives it: compact JSON."""
+    return json.dumps(message, separators=(",", ":"))
+
+
+def make_app(factory: SessionFactory, max_viewers: int = MAX_VIEWERS, title: str = "Pinball"):
+    """The ASGI app: the page (``/``), its files (``/static``) and each page's WebSocket
+    (``/ws``), whose session ``factory()`` makes."""
+    try:
+        from starlette.applications import Starlette
+        from starlette.responses import HTMLResponse
+        from starlette.routing import Mount, Route, WebSocketRoute
+        from starlette.staticfiles import StaticFiles
+        from starlette.websockets import WebSocket, WebSocketDisconnect
+    except ImportError as missing:
+        raise SystemExit(f"{NEEDS_WEB}: {missing.name} is missing") from None
+    page = (STATIC / "index.html").read_text(encoding="utf-8").replace("{{title}}", title)
+    viewers: set[Any] = set()
+
+    async def index(request: Any) -> HTMLResponse:
+        return HTMLResponse(page)
+
+    async def socket(websocket: WebSocket) -> None:
+        origin = websocket.headers.get("origin")
+        if origin is not None and urlsplit(origin).netloc != websocket.headers.get("host"):
+            await websocket.close(code=1008, reason="another site's page")
+            return
+        await websocket.accept()
+        if len(viewers) >= max_viewers:
+            await websocket.send_text(encode(error(f"full: {max_viewers} pages at most")))
+            await websocket.close(code=1013)
+            return
+        viewers.add(websocket)
+        session = None
+        try:
+            session = factory()
+            await play_session(websocket, session, WebSocketDisconnect)
+        finally:
+            viewers.discard(websocket)
+            if session is not None:
+                session.close()
+
+    app = Starlette(
+        routes=[
+            Route("/", index),
+            Mount("/static", StaticFiles(directory=STATIC), name="static"),
+            WebSocketRoute("/ws", socket),
+        ]
+    )
+    app.state.viewers = viewers
+    return app
+
+
+async def play_session(websocket: Any, session: Session, disconnect: type[Exception]) -> None:
+    """Run ``session`` for one page: its hello, then a tick every frame at real speed, the
+    page's messages applied as they come, each sent through an :class:`Outbox`."""
+    outbox = Outbox()
+    for message in session.hello():
+        outbox.put(message)
+
+    async def send() -> None:
+        while True:
+            await websocket.send_text(encode(await outbox.get()))
+
+    async def receive() -> None:
+        while True:
+            text = await websocket.receive_text()
+            for reply in session.receive(text):
+                outbox.put(reply)
+
+    async def tick() -> None:
+        loop = asyncio.get_running_loop()
+        period = 1.0 / session.fps
+        deadline = loop.time()
+        while True:
+            for message in session.tick():
+                outbox.put(message)
+            deadline += period
+            late = loop.time() - deadline
+            if late > MAX_LATE_FRAMES * period:  # fell behind (a slow machine): no burst
+                deadline = loop.time()
+            await asyncio.sleep(max(0.0, deadline - loop.time()))
+
+    tasks = [asyncio.create_task(job()) for job in (send, receive, tick)]
+    try:
+        done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        for task in done:  # a page gone ends the session; anything else is a bug to show
+            failure = task.exception()
+            if failure is not None and not isinstance(failure, (disconnect, RuntimeError)):
+                raise failure
+    finally:
+        for task in tasks:
+            task.cancel()
+        for task in tasks:
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+
+
+# --- the command line -------------------------------------------------------------------------
+
+
+def parser() -> argparse.ArgumentParser:
+    """The command line's arguments (``agents.serve`` adds ``--model``)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--host", default=HOST, help=f"address to listen on (default {HOST})")
+    parser.add_argument("--port", type=int, default=PORT, help=f"port (default {PORT})")
+    parser.add_argument(
+        "--max-viewers", type=int, default=MAX_VIEWERS,
+        help=f"pages at once, each its own game (default {MAX_VIEWERS})",
+    )  # fmt: skip
+    parser.add_argument("--env", choices=ENV_IDS, help="the env (default Pinball-v0)")
+    parser.add_argument("--table", help="table name or YAML path (default: the env's own)")
+    parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")
+    parser.add_argument(
+        "--protocol", action="store_true", help="the benchmark protocol's game (sticky actions)"
+    )
+    parser.add_argument("--games", type=int, default=1, help="watch: games side by side")
+    modes = parser.add_mutually_exclusive_group()
+    modes.add_argument("--record", type=Path, help="play: write the games played to this file")
+    modes.add_argument("--replay", type=Path, help="replay a recording on a timeline")
+    modes.add_argument("--watch", choices=WATCHERS, help="watch a scripted player play")
+    return parser
+
+
+def check_args(command: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse the combinations that make no sense, before anything runs."""
+    if args.seed is not None and args.seed < 0:
+        command.error(f"--seed must be >= 0, got {args.seed}")
+    if not 1 <= args.max_viewers <= 1000:
+        command.error(f"--max-viewers must be from 1 to 1000, got {args.max_viewers}")
+    if not 1 <= args.games <= 16:
+        command.error(f"--games must be from 1 to 16, got {args.games}")
+    if args.protocol and args.table:
+        command.error("--protocol plays the env's own table")
+    if args.replay is not None and (
+        args.env or args.table or args.seed is not None or args.protocol
+    ):
+        command.error("--replay takes the env, the table and the seeds from the recording")
+    env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
+    if args.protocol and env_id not in PROTOCOL_ENV_IDS:
+        command.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
+    if args.record is not None and env_id not in RECORDED_ENV_IDS:
+        command.error(f"--record: recordings are of {', '.join(RECORDED_ENV_IDS)}, not {env_id}")
+
+
+def env_options(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
+    """The env id and ``gym.make`` options of the command line's game."""
+    env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
+    options: dict[str, Any] = {"table": args.table or default_table(env_id)}
+    if args.protocol:
+        options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
+    return env_id, options
+
+
+def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
+    """What each page gets (play, watch or replay) and the page's title; SystemExit for a
+    recording that cannot be replayed."""
+    if args.replay is not None:
+        try:
+            index = ReplayIndex(load_recording(args.replay))
+        except RecordingError as refused:
+            raise SystemExit(f"refused: {refused}") from None
+        return (lambda: ReplaySession(index)), f"Pinball replay: {args.replay.name}"
+    env_id, options = env_options(args)
+    if args.watch is not None:
+        seed = args.seed or 0
+
+        def heuristic() -> Player:
+            env = gym.make(env_id, **options)
+            policy = HeuristicPolicy(env.unwrapped.table)
+            return Player(env, lambda obs, info: policy(info), policy.reset)
+
+        def watch() -> Session:
+            return WatchSession([heuristic() for _ in range(args.games)], seed, args.watch)
+
+        return watch, f"Pinball: {args.watch} on {env_id}"
+    recorder = None
+    if args.record is not None:
+        probe = make_recorded_env(options, env_id=env_id)
+        recorder = Recorder(args.record, probe, env_id, options)
+        probe.close()
+    return (lambda: PlaySession(env_id, options, args.seed, recorder)), f"Pinball: {env_id}"
+
+
+def run(app: Any, host: str, port: int) -> None:
+    """Serve ``app`` until interrupted (uvicorn)."""
+    try:
+        import uvicorn
+    except ImportError:
+        raise SystemExit(f"{NEEDS_WEB}: uvicorn is missing") from None
+    print(f"serving on http://{host}:{port}/ (Ctrl+C stops)", file=sys.stderr)
+    uvicorn.run(app, host=host, port=port, log_level="warning")
+
+
+def main(argv: list[str] | None = None) -> None:
+    command = parser()
+    args = command.parse_args(argv)
+    check_args(command, args)
+    factory, title = session_factory(args)
+    run(make_app(factory, args.max_viewers, title), args.host, args.port)
+
+
+if __name__ == "__main__":
+    main()
