@@ -286,7 +286,10 @@ class _Watched:
         self.player = player
         self.core: PinballEnv = player.env.unwrapped
         self.frames: deque[dict[str, Any]] = deque()
-        if self.core.options.frame_skip > 1:  # every frame a step plays, as a video records
+        options = self.core.options
+        # A step of several frames (frame skip, skip_above): each frame shown, as a video has.
+        self.every_frame = options.frame_skip > 1 or options.skip_above > 0
+        if self.every_frame:
             self.core.game.on_frame = lambda: self.frames.append(frame_state(self.core))
         self.over = 0  # ticks the ended game has been shown; 0 while playing
 
@@ -303,7 +306,7 @@ class _Watched:
         if not self.frames and not self.over:
             action = self.player.act(self.obs, self.info)
             self.obs, _, terminated, truncated, self.info = self.player.env.step(action)
-            if self.core.options.frame_skip == 1:
+            if not self.every_frame or not self.frames:  # (a step with no frame: its end)
                 self.frames.append(frame_state(self.core))
             if terminated or truncated:
                 self.over = 1
