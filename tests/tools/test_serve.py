@@ -226,6 +226,7 @@ def test_the_replay_is_the_recorded_game_bitwise(recording_path):
     # Scrubbed there: to the end, back to the start, past it (from a snapshot), back again.
     for target in (10_000, 0, 250, 37, 301):
         session.receive(json.dumps({"type": "seek", "frame": target}))
+        serve.encode(session.tick()[0])  # every message is JSON
     assert session.frame == 301 and state_equal(session.core.game.snapshot(), reference)
     session.receive('{"type": "step", "frames": -1}')
     session.receive('{"type": "step", "frames": 1}')

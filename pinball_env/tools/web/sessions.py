@@ -406,7 +406,7 @@ class ReplayIndex:
         def viewer(env: gym.Env, name: str) -> None:  # before each step of each game
             nonlocal count
             game = int(np.searchsorted(starts, count, side="right")) - 1
-            frame = count - starts[game]
+            frame = int(count - starts[game])
             count += 1
             core: PinballEnv = env.unwrapped
             self.scores[game].append(int(core.game.score[0]))
