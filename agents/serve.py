@@ -38,6 +38,7 @@ def main(argv: list[str] | None = None) -> None:
               if getattr(args, name) not in (None, False)]  # fmt: skip
     if others:
         command.error(f"--model plays the agent's own game: no {others[0]}")
+    serve.require_web()
     try:
         policy = load_policy(args.model)
     except (ConfigError, ValueError, OSError) as error:

@@ -40,6 +40,7 @@ from urllib.parse import urlsplit
 import gymnasium as gym
 
 from pinball_env import ENVS
+from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
 from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
@@ -69,7 +70,6 @@ MAX_QUEUED = 32  # messages other than frames waiting for a slow page (the oldes
 MAX_LATE_FRAMES = 6  # a tick this late skips ahead rather than stepping to catch up
 STATIC = Path(__file__).resolve().parent / "web" / "static"
 ENV_IDS = tuple(env_id for env_id in ENVS if env_id.startswith("Pinball-v"))  # v0 to v3
-NEEDS_WEB = 'the browser page needs the web extra, pip install "pinball-env[web]"'
 WATCHERS = ("heuristic",)  # the players --watch names
 
 SessionFactory = Callable[[], Session]
@@ -111,14 +111,13 @@ def encode(message: Message) -> str:
 def make_app(factory: SessionFactory, max_viewers: int = MAX_VIEWERS, title: str = "Pinball"):
     """The ASGI app: the page (``/``), its files (``/static``) and each page's WebSocket
     (``/ws``), whose session ``factory()`` makes."""
-    try:
-        from starlette.applications import Starlette
-        from starlette.responses import HTMLResponse
-        from starlette.routing import Mount, Route, WebSocketRoute
-        from starlette.staticfiles import StaticFiles
-        from starlette.websockets import WebSocket, WebSocketDisconnect
-    except ImportError as missing:
-        raise SystemExit(f"{NEEDS_WEB}: {missing.name} is missing") from None
+    require("starlette", "websockets")  # MissingDependency names the web extra
+    from starlette.applications import Starlette
+    from starlette.responses import HTMLResponse
+    from starlette.routing import Mount, Route, WebSocketRoute
+    from starlette.staticfiles import StaticFiles
+    from starlette.websockets import WebSocket, WebSocketDisconnect
+
     page = (STATIC / "index.html").read_text(encoding="utf-8").replace("{{title}}", title)
     viewers: set[Any] = set()
 
@@ -287,12 +286,18 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
     return (lambda: PlaySession(env_id, options, args.seed, recorder)), f"Pinball: {env_id}"
 
 
+def require_web() -> None:
+    """SystemExit naming the web extra if a part of it is missing: checked before a
+    recording is replayed, a model loaded or a game made."""
+    try:
+        require("starlette", "uvicorn", "websockets")
+    except MissingDependency as error:
+        raise SystemExit(str(error)) from None
+
+
 def run(app: Any, host: str, port: int) -> None:
     """Serve ``app`` until interrupted (uvicorn)."""
-    try:
-        import uvicorn
-    except ImportError:
-        raise SystemExit(f"{NEEDS_WEB}: uvicorn is missing") from None
+    uvicorn = require("uvicorn")
     print(f"serving on http://{host}:{port}/ (Ctrl+C stops)", file=sys.stderr)
     uvicorn.run(app, host=host, port=port, log_level="warning")
 
@@ -301,6 +306,7 @@ def main(argv: list[str] | None = None) -> None:
     command = parser()
     args = command.parse_args(argv)
     check_args(command, args)
+    require_web()
     factory, title = session_factory(args)
     run(make_app(factory, args.max_viewers, title), args.host, args.port)
 
