@@ -168,8 +168,11 @@ async def play_session(websocket: Any, session: Session, disconnect: type[Except
 
     async def receive() -> None:
         while True:
-            text = await websocket.receive_text()
-            for reply in session.receive(text):
+            message = await websocket.receive()
+            if message["type"] == "websocket.disconnect":
+                raise disconnect(message.get("code", 1000))
+            # A binary message is refused by the session as any malformed one is.
+            for reply in session.receive(message.get("text") or message.get("bytes") or ""):
                 outbox.put(reply)
 
     async def tick() -> None:

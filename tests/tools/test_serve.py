@@ -323,11 +323,13 @@ def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
             assert hello["type"] == "hello" and hello["env_id"] == "Pinball-v1"
             assert json.loads(await second.recv())["type"] == "hello"
             await first.send("not json")
+            await first.send(b"\x00\xff")  # a binary message, as malformed
             await first.send('{"type": "buttons", "held": ["left"]}')
-            seen = set()
-            while "error" not in seen or "frame" not in seen:
+            errors, frames = 0, 0
+            while errors < 2 or not frames:
                 message = json.loads(await first.recv())
-                seen.add(message["type"])
+                errors += message["type"] == "error"
+                frames += message["type"] == "frame"
             lifted = None
             for _ in range(30):
                 message = json.loads(await first.recv())

@@ -293,7 +293,7 @@ function showTimeline(timeline) {
 function showPosition(replay) {
   const slider = document.getElementById("timeline");
   if (document.activeElement !== slider) slider.value = replay.frame;
-  document.getElementById("play").textContent = replay.playing ? "⏸" : "▶";
+  document.getElementById("play").textContent = replay.playing ? "pause" : "play";
   const scores = pinball.timeline ? pinball.timeline.scores : [];
   document.getElementById("position").textContent =
     `frame ${replay.frame} / ${replay.frames}, score ${scores[replay.frame] ?? ""}` +
