@@ -18,12 +18,12 @@ from typing import Any
 from agents.config import ConfigError
 from agents.policy import Policy, load_policy
 from pinball_env.tools import serve
-from pinball_env.tools.web.sessions import Player, WatchSession
+from pinball_env.tools.web.sessions import WatchedPlayer, WatchSession
 
 
-def agent_player(policy: Policy) -> Player:
+def agent_player(policy: Policy) -> WatchedPlayer:
     """A game of ``policy``'s env chain, played by it (greedy)."""
-    return Player(policy.make_env(), lambda obs, info: policy.act(obs))
+    return WatchedPlayer(policy.make_env(), lambda obs, info: policy.act(obs))
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -53,12 +53,12 @@ from pinball_env.recording import (
 )
 from pinball_env.tools.web.sessions import (
     Message,
-    Player,
     PlaySession,
     Recorder,
     ReplayIndex,
     ReplaySession,
     Session,
+    WatchedPlayer,
     WatchSession,
     error,
 )
@@ -272,10 +272,10 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
     if args.watch is not None:
         seed = args.seed or 0
 
-        def heuristic() -> Player:
+        def heuristic() -> WatchedPlayer:
             env = gym.make(env_id, **options)
             policy = HeuristicPolicy(env.unwrapped.table)
-            return Player(env, lambda obs, info: policy(info), policy.reset)
+            return WatchedPlayer(env, lambda obs, info: policy(info), policy.reset)
 
         def watch() -> Session:
             return WatchSession([heuristic() for _ in range(args.games)], seed, args.watch)

@@ -15,6 +15,7 @@ import gymnasium as gym
 import pytest
 
 from pinball_env.envs import PinballEnv
+from pinball_env.players import HeuristicPolicy
 from pinball_env.recording import load_recording, write_recording
 from pinball_env.recording import replay as replay_recording
 from pinball_env.tools import serve
@@ -25,6 +26,7 @@ from pinball_env.tools.web.sessions import (
     Recorder,
     ReplayIndex,
     ReplaySession,
+    WatchedPlayer,
     WatchSession,
 )
 from pinball_env.tools.web.stream import BROWSER_KEYS, geometry, page_keys
@@ -209,6 +211,26 @@ def test_a_pages_games_are_recorded_in_the_play_tools_format(recording_path):
     assert recording.games[0].score > 0
 
 
+def test_a_protocol_game_played_on_the_page_is_a_human_score(tmp_path):
+    """--protocol --record: the recording agents.evaluate --recording scores on the protocol."""
+    evaluation = pytest.importorskip("agents.evaluation")
+    args = serve.parser().parse_args(["--protocol", "--record", str(tmp_path / "me.json")])
+    env_id, options = serve.env_options(args)
+    factory, _ = serve.session_factory(args)
+    session = factory()
+    for tick in range(200):
+        held = ["plunger"] if tick < 30 else ["left"] if tick % 20 < 3 else []
+        session.receive(json.dumps({"type": "buttons", "held": held}))
+        session.tick()
+    session.close()
+    recording = load_recording(args.record)
+    assert (recording.env_id, recording.options) == (env_id, options)
+    evaluation.check_recording(recording)  # raises unless it is the protocol's game
+    assert replay_recording(recording) == [recording.games[0].score]
+    with pytest.raises(ValueError, match="one recording holds games of one game"):
+        PlaySession("Pinball-v1", {"table": "classic_v1"}, recorder=session.recorder)
+
+
 def test_the_replay_is_the_recorded_game_bitwise(recording_path):
     recording = load_recording(recording_path)
     index = ReplayIndex(recording, every=100)
@@ -268,6 +290,20 @@ def test_watching_shows_every_frame_of_every_game_side_by_side():
         assert [state["frame"] for state in states] == [tick, tick]
         assert [state["seed"] for state in states] == [5, 6]
     assert isinstance(session, WatchSession)
+    session.close()
+
+
+@pytest.mark.parametrize("options", [{"frame_skip": 4}, {"skip_above": 0.45}])
+def test_watching_a_step_of_several_frames_shows_each_of_them(options):
+    """As agents are trained (frame skip, skip_above): every frame on the page, one a tick,
+    and each step's last frame with its points counted."""
+    env = gym.make("Pinball-v1", **options)
+    policy = HeuristicPolicy(env.unwrapped.table)
+    session = WatchSession([WatchedPlayer(env, lambda obs, info: policy(info))], seed=1)
+    session.hello()
+    frames = [session.tick()[0]["games"][0] for _ in range(600)]
+    assert [state["frame"] for state in frames] == list(range(1, 601))
+    assert frames[-1]["score"] <= env.unwrapped.game.score[0]
     session.close()
 
 

@@ -178,8 +178,16 @@ class PlaySession(Session):
         seed: int | None = None,
         recorder: Recorder | None = None,
     ) -> None:
+        options = dict(options or {})
+        if recorder is not None:
+            recorded = recorder.recording
+            if (recorded.env_id, recorded.options) != (env_id, options):
+                raise ValueError(
+                    f"the recorder records {recorded.env_id} with {recorded.options}, not "
+                    f"{env_id} with {options}: one recording holds games of one game"
+                )
         self.env_id = env_id
-        self.env = make_recorded_env(options or {}, env_id=env_id)
+        self.env = make_recorded_env(options, env_id=env_id)
         self.core: PinballEnv = self.env.unwrapped
         self.fps = self.core.steps_per_second
         self.names = self.core.game.button_names
@@ -270,7 +278,7 @@ class PlaySession(Session):
 
 
 @dataclasses.dataclass
-class Player:
+class WatchedPlayer:
     """A player and its game: ``env`` (a ``gym.make`` env, wrappers and all) and ``act(obs,
     info)``, its action; ``reset()`` (when given) before each game."""
 
@@ -282,7 +290,7 @@ class Player:
 class _Watched:
     """One watched game: its player, its frames not yet shown, its state."""
 
-    def __init__(self, player: Player) -> None:
+    def __init__(self, player: WatchedPlayer) -> None:
         self.player = player
         self.core: PinballEnv = player.env.unwrapped
         self.frames: deque[dict[str, Any]] = deque()
@@ -290,8 +298,13 @@ class _Watched:
         # A step of several frames (frame skip, skip_above): each frame shown, as a video has.
         self.every_frame = options.frame_skip > 1 or options.skip_above > 0
         if self.every_frame:
-            self.core.game.on_frame = lambda: self.frames.append(frame_state(self.core))
+            self.core.game.on_frame = self._on_frame
         self.over = 0  # ticks the ended game has been shown; 0 while playing
+
+    def _on_frame(self) -> None:
+        state = frame_state(self.core)
+        state["frame"] += 1  # the frame just played: the game counts it (and its points) after
+        self.frames.append(state)
 
     def new_game(self, seed: int) -> None:
         self.seed = seed
@@ -306,7 +319,9 @@ class _Watched:
         if not self.frames and not self.over:
             action = self.player.act(self.obs, self.info)
             self.obs, _, terminated, truncated, self.info = self.player.env.step(action)
-            if not self.every_frame or not self.frames:  # (a step with no frame: its end)
+            if self.every_frame and self.frames:  # the step's last frame, its points counted
+                self.frames[-1] = frame_state(self.core)
+            else:
                 self.frames.append(frame_state(self.core))
             if terminated or truncated:
                 self.over = 1
@@ -317,13 +332,15 @@ class _Watched:
 
 class WatchSession(Session):
     """``players`` playing, their games side by side, one frame per tick (every frame of a
-    step of several frames). Game ``i`` starts on seed ``seed + i``, and each next game of it
-    ``len(players)`` seeds on; an ended game stays on the page 2 seconds. ``name``: the
+    step of several frames). Game ``i`` starts on seed ``seed + i``, and each new game on the
+    next seed not yet played; an ended game stays on the page 2 seconds. ``name``: the
     player's, shown on the page. Pause and restart (every game anew, on the next seeds)."""
 
     accepted = ("command",)
 
-    def __init__(self, players: Sequence[Player], seed: int = 0, name: str = "player") -> None:
+    def __init__(
+        self, players: Sequence[WatchedPlayer], seed: int = 0, name: str = "player"
+    ) -> None:
         if not players:
             raise ValueError("a watch session needs at least one player")
         self.games = [_Watched(player) for player in players]
