@@ -95,6 +95,12 @@ def test_a_key_or_a_touch_button_lifts_a_flipper(browser, serving):
         page.wait_for_function(
             f"window.pinball.drawn.games[0].flippers[{LEFT}] === {rest}", timeout=TIMEOUT
         )
+        # P pauses: the drawn frame stands still, the board says so; P again plays on.
+        page.keyboard.press("p")
+        page.wait_for_function("window.pinball.drawn.paused === true", timeout=TIMEOUT)
+        assert "PAUSED" in page.inner_text(".board")
+        page.keyboard.press("p")
+        page.wait_for_function("window.pinball.drawn.paused === false", timeout=TIMEOUT)
         # The right flipper from its touch button (angles turn the other way).
         right_rest = drawn(page, f"games[0].flippers[{RIGHT}]")
         button = page.locator('#touch button[data-name="right"]')
@@ -127,10 +133,23 @@ def test_a_recording_replays_to_its_recorded_score(browser, serving, tmp_path):
         )
         assert drawn(page, "games[0].score") == game.score > 0
         assert f"score {game.score}" in page.inner_text("#position")
-        # Scrubbed back to the start: the score there, as the timeline says.
-        page.evaluate("window.pinball.send({type: 'seek', frame: 0})")
-        page.wait_for_function("window.pinball.drawn.replay.frame === 0", timeout=TIMEOUT)
-        assert drawn(page, "games[0].score") == 0
+        # Scrubbed back on the timeline: the score there, as the timeline says.
+        middle = game.frames // 2
+        page.evaluate(
+            f"""() => {{
+            const slider = document.getElementById("timeline");
+            slider.value = {middle};
+            slider.dispatchEvent(new Event("input"));
+        }}"""
+        )
+        page.wait_for_function(f"window.pinball.drawn.replay.frame === {middle}", timeout=TIMEOUT)
+        scores = page.evaluate("window.pinball.timeline.scores")
+        assert drawn(page, "games[0].score") == scores[middle]
+        # A frame on, from the page's button.
+        page.click("#next")
+        page.wait_for_function(
+            f"window.pinball.drawn.replay.frame === {middle + 1}", timeout=TIMEOUT
+        )
         page.close()
 
 

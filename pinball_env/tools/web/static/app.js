@@ -117,7 +117,7 @@ function drawFlipper(context, [px, py, length, rb, rt], angle, colour) {
   disc(context, tx, ty, rt, colour);
 }
 
-function draw(view, state) {
+function draw(view, state, paused) {
   const t = view.table, c = t.colours, w = t.half_widths, context = view.context;
   context.setTransform(1, 0, 0, 1, 0, 0);
   context.fillStyle = rgb(c.background);
@@ -149,10 +149,10 @@ function draw(view, state) {
   state.balls.forEach(([x, y], j) => {
     disc(context, x, j === 0 && state.on_plunger ? y - drop : y, t.ball_radius, c.ball);
   });
-  drawBoard(view, state);
+  drawBoard(view, state, paused);
 }
 
-function drawBoard(view, state) {
+function drawBoard(view, state, paused) {
   const rows = [["score", state.score], ["balls", state.balls_left]];
   if (state.trough !== undefined) rows.push(["trough", state.trough]);
   if (state.bonus !== undefined) rows.push(["bonus", `${state.bonus} ×${state.multiplier}`]);
@@ -161,15 +161,21 @@ function drawBoard(view, state) {
   if (state.tilted) html += `<div class="value alert">TILT</div>`;
   else if (state.warnings) html += `<div class="value alert">WARNING ${state.warnings}</div>`;
   if (state.over) html += `<div class="value alert">GAME OVER</div>`;
-  else if (pending && pending.paused) html += `<div class="value alert">PAUSED</div>`;
+  else if (paused) html += `<div class="value alert">PAUSED</div>`;
   if (html !== view.lastBoard) view.board.innerHTML = view.lastBoard = html;
 }
 
+let seekTo = null; // the timeline's frame to seek, sent once a frame however fast it is dragged
+
 function frameLoop() {
+  if (seekTo !== null) {
+    pinball.send({ type: "seek", frame: seekTo });
+    seekTo = null;
+  }
   if (pending) {
     const message = pending;
     pending = null;
-    message.games.forEach((state, j) => views[j] && draw(views[j], state));
+    message.games.forEach((state, j) => views[j] && draw(views[j], state, message.paused));
     if (message.replay) showPosition(message.replay);
     if (views.length) {
       pinball.drawn = message;
@@ -258,7 +264,7 @@ function startReplay(hello) {
   const speed = document.getElementById("speed");
   speed.onchange = () => pinball.send({ type: "speed", speed: Number(speed.value) });
   const timeline = document.getElementById("timeline");
-  timeline.oninput = () => pinball.send({ type: "seek", frame: Number(timeline.value) });
+  timeline.oninput = () => { seekTo = Number(timeline.value); };
 }
 
 function replayKey(event, down) {
