@@ -50,7 +50,8 @@ def main(argv: list[str] | None = None) -> None:
         return WatchSession([agent_player(policy) for _ in range(args.games)], seed, name)
 
     title = f"Pinball: {name} on {policy.env_id}"
-    serve.run(serve.make_app(watch, args.max_viewers, title), args.host, args.port)
+    app = serve.make_app(watch, args.max_viewers, title, serve.allowed_hosts(args.host))
+    serve.run(app, args.host, args.port)
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ frames) and a few other messages; a malformed message from a page gets an error 
 import argparse
 import asyncio
 import contextlib
+import html
 import json
 import sys
 from collections import deque
@@ -64,6 +65,7 @@ from pinball_env.tools.web.sessions import (
 )
 
 HOST = "127.0.0.1"  # this machine only; --host 0.0.0.0 opens it to the network
+LOCAL_NAMES = ("localhost", "127.0.0.1")  # what a page on this machine calls it (the Host)
 PORT = 8000
 MAX_VIEWERS = 8  # pages at once: each has its own game
 MAX_QUEUED = 32  # messages other than frames waiting for a slow page (the oldest dropped)
@@ -108,17 +110,27 @@ def encode(message: Message) -> str:
     return json.dumps(message, separators=(",", ":"))
 
 
-def make_app(factory: SessionFactory, max_viewers: int = MAX_VIEWERS, title: str = "Pinball"):
+def make_app(
+    factory: SessionFactory,
+    max_viewers: int = MAX_VIEWERS,
+    title: str = "Pinball",
+    hosts: tuple[str, ...] | None = LOCAL_NAMES,
+) -> Any:
     """The ASGI app: the page (``/``), its files (``/static``) and each page's WebSocket
-    (``/ws``), whose session ``factory()`` makes."""
+    (``/ws``), whose session ``factory()`` makes. ``hosts``: the names a request may call the
+    server by (the Host header; None: any), so that another site's name pointed at this
+    machine (DNS rebinding) reaches nothing."""
     require("starlette", "websockets")  # MissingDependency names the web extra
     from starlette.applications import Starlette
+    from starlette.middleware import Middleware
+    from starlette.middleware.trustedhost import TrustedHostMiddleware
     from starlette.responses import HTMLResponse
     from starlette.routing import Mount, Route, WebSocketRoute
     from starlette.staticfiles import StaticFiles
     from starlette.websockets import WebSocket, WebSocketDisconnect
 
-    page = (STATIC / "index.html").read_text(encoding="utf-8").replace("{{title}}", title)
+    page = (STATIC / "index.html").read_text(encoding="utf-8")
+    page = page.replace("{{title}}", html.escape(title))
     viewers: set[Any] = set()
 
     async def index(request: Any) -> HTMLResponse:
@@ -149,7 +161,10 @@ def make_app(factory: SessionFactory, max_viewers: int = MAX_VIEWERS, title: str
             Route("/", index),
             Mount("/static", StaticFiles(directory=STATIC), name="static"),
             WebSocketRoute("/ws", socket),
-        ]
+        ],
+        middleware=[]
+        if hosts is None
+        else [Middleware(TrustedHostMiddleware, allowed_hosts=hosts)],
     )
     app.state.viewers = viewers
     return app
@@ -289,6 +304,12 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
     return (lambda: PlaySession(env_id, options, args.seed, recorder)), f"Pinball: {env_id}"
 
 
+def allowed_hosts(host: str) -> tuple[str, ...] | None:
+    """The Host names a server listening on ``host`` answers: this machine's own names when it
+    listens on it only, any name when it is opened to the network (``--host``)."""
+    return LOCAL_NAMES if host in LOCAL_NAMES else None
+
+
 def require_web() -> None:
     """SystemExit naming the web extra if a part of it is missing: checked before a
     recording is replayed, a model loaded or a game made."""
@@ -311,7 +332,7 @@ def main(argv: list[str] | None = None) -> None:
     check_args(command, args)
     require_web()
     factory, title = session_factory(args)
-    run(make_app(factory, args.max_viewers, title), args.host, args.port)
+    run(make_app(factory, args.max_viewers, title, allowed_hosts(args.host)), args.host, args.port)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,6 @@ import dataclasses
 import json
 import urllib.error
 import urllib.request
-import warnings
 from pathlib import Path
 
 import gymnasium as gym
@@ -33,8 +32,6 @@ from pinball_env.tools.web.stream import BROWSER_KEYS, geometry, page_keys
 
 ENV_IDS = ("Pinball-v0", "Pinball-v1", "Pinball-v2", "Pinball-v3")
 LEFT = 0  # the left flipper's index in a frame's "flippers"
-
-warnings.filterwarnings("ignore", "Pinball-v[012] is out of date", DeprecationWarning)
 
 
 def frame(messages: list[dict]) -> dict:
@@ -313,7 +310,9 @@ def test_watching_a_step_of_several_frames_shows_each_of_them(options):
 def test_it_binds_to_this_machine_unless_told():
     args = serve.parser().parse_args([])
     assert (args.host, args.port) == ("127.0.0.1", 8000)
+    assert serve.allowed_hosts(args.host) == ("localhost", "127.0.0.1")
     assert serve.parser().parse_args(["--host", "0.0.0.0"]).host == "0.0.0.0"
+    assert serve.allowed_hosts("0.0.0.0") is None  # opened to the network: any name
 
 
 @pytest.mark.parametrize(
@@ -387,6 +386,10 @@ def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
         for path in ("/static/../serve.py", "/etc/passwd", "/static/", "/ws"):
             with pytest.raises(urllib.error.HTTPError):
                 urllib.request.urlopen(url + path)
+        # Called by another name (a site's name pointed at 127.0.0.1): refused.
+        request = urllib.request.Request(url + "/", headers={"Host": "evil.example"})
+        with pytest.raises(urllib.error.HTTPError, match="400"):
+            urllib.request.urlopen(request)
         asyncio.run(talk(url))
 
 

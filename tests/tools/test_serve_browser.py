@@ -9,7 +9,6 @@ recorded score, two pages at once. Skipped, saying which, without chromium or Pl
 import json
 import shutil
 import sys
-import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -25,8 +24,6 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine")
 playwright_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 pytest.importorskip("uvicorn", reason="the web extra is not installed")
-
-warnings.filterwarnings("ignore", "Pinball-v[012] is out of date", DeprecationWarning)
 
 LEFT, RIGHT = 0, 1  # the flippers' indices in a drawn state
 TIMEOUT = 60_000  # [ms] for the page to show what is waited for (a loaded machine is slow)
