@@ -149,22 +149,25 @@ def make_app(
         viewers.add(websocket)
         session = None
         try:
-            session = factory()
+            try:
+                session = factory()
+            except Exception as failure:  # the page says why, the server log has the rest
+                await websocket.send_text(encode(error(f"no game could start: {failure}")))
+                raise
             await play_session(websocket, session, WebSocketDisconnect)
         finally:
             viewers.discard(websocket)
             if session is not None:
                 session.close()
 
+    trusted = [] if hosts is None else [Middleware(TrustedHostMiddleware, allowed_hosts=hosts)]
     app = Starlette(
         routes=[
             Route("/", index),
             Mount("/static", StaticFiles(directory=STATIC), name="static"),
             WebSocketRoute("/ws", socket),
         ],
-        middleware=[]
-        if hosts is None
-        else [Middleware(TrustedHostMiddleware, allowed_hosts=hosts)],
+        middleware=trusted,
     )
     app.state.viewers = viewers
     return app
@@ -208,6 +211,7 @@ async def play_session(websocket: Any, session: Session, disconnect: type[Except
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         for task in done:  # a page gone ends the session; anything else is a bug to show
             failure = task.exception()
+            # (Starlette's send to a page that has gone raises RuntimeError.)
             if failure is not None and not isinstance(failure, (disconnect, RuntimeError)):
                 raise failure
     finally:

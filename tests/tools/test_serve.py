@@ -5,6 +5,7 @@ the command line's safe defaults, and the WebSocket of a real server."""
 
 import asyncio
 import dataclasses
+import functools
 import json
 import urllib.error
 import urllib.request
@@ -353,7 +354,9 @@ def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
 
     async def talk(url: str) -> None:
         ws_url = url.replace("http", "ws") + "/ws"
-        async with websockets.connect(ws_url) as first, websockets.connect(ws_url) as second:
+        # (A client that stops reading holds back the server's closing frame: no queue limit.)
+        connect = functools.partial(websockets.connect, ws_url, max_queue=None)
+        async with connect() as first, connect() as second:
             hello = json.loads(await first.recv())
             assert hello["type"] == "hello" and hello["env_id"] == "Pinball-v1"
             assert json.loads(await second.recv())["type"] == "hello"
