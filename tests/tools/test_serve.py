@@ -308,6 +308,21 @@ def test_watching_a_step_of_several_frames_shows_each_of_them(options):
 # --- the command line and the server -----------------------------------------------------------
 
 
+def test_a_slow_page_skips_frames_and_its_queue_stays_bounded():
+    outbox = serve.Outbox(limit=4)
+    for frame_number in range(100):
+        outbox.put({"type": "frame", "frame": frame_number})
+        outbox.put({"type": "error", "message": str(frame_number)})
+
+    async def drain() -> list[dict]:
+        return [await outbox.get() for _ in range(5)]
+
+    messages = asyncio.run(drain())
+    # The 4 newest other messages, then the newest frame only: 99 frames were never sent.
+    assert [m.get("message") for m in messages[:4]] == ["96", "97", "98", "99"]
+    assert messages[4] == {"type": "frame", "frame": 99} and outbox.dropped == 99
+
+
 def test_it_binds_to_this_machine_unless_told():
     args = serve.parser().parse_args([])
     assert (args.host, args.port) == ("127.0.0.1", 8000)
