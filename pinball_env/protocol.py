@@ -3,9 +3,10 @@
 As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggregate metrics
 (Agarwal et al. 2021):
 
-- **Envs**: ``Pinball-v2`` (the whole cabinet, its full action set of 32 actions, a tilt that
-  any sustained nudging trips); ``Pinball-v1`` (the same game with v1's tilt, which ignores
-  one-way nudging) and ``Pinball-v0`` (flippers only), each a track of its own: each on its own
+- **Envs**: ``Pinball-v3`` (the whole cabinet, its full action set of 32 actions, a tilt that
+  any sustained nudging trips, multiball); ``Pinball-v2`` (the same game of one ball),
+  ``Pinball-v1`` (v2's game with v1's tilt, which ignores one-way nudging) and ``Pinball-v0``
+  (flippers only), each a track of its own: each on its own
   table, 3 balls, a game of two minutes (:data:`GAME_OPTIONS`). An agent may choose how it sees
   and acts (``obs_type``, ``frame_skip``, ``skip_above``, ``rays``, ``nudge_actions``, its
   reward shaping), not the game.
@@ -38,9 +39,10 @@ import numpy as np
 
 from pinball_env.options import GAME_FRAMES
 
-# The envs of the protocol: the whole cabinet with the tilt any sustained nudging trips first,
-# then v1's cabinet (whose tilt ignores one-way nudging) and the flippers-only game, as tracks.
-ENV_IDS = ("Pinball-v2", "Pinball-v1", "Pinball-v0")
+# The envs of the protocol: the whole cabinet with the tilt any sustained nudging trips and
+# multiball first, then the same game of one ball, v1's cabinet (whose tilt ignores one-way
+# nudging) and the flippers-only game, as tracks.
+ENV_IDS = ("Pinball-v3", "Pinball-v2", "Pinball-v1", "Pinball-v0")
 # ALE v5's sticky actions: each frame repeats the last one's buttons with this probability.
 REPEAT_ACTION_PROBABILITY = 0.25
 # The game every protocol evaluation plays, whatever the agent's own options: its table (the
@@ -73,11 +75,12 @@ PROFILE_TAUS = np.linspace(-0.5, 2.5, 121)
 
 # Mean scores of random play (uniform actions) and of the heuristic
 # (pinball_env.players.HeuristicPolicy) over EVAL_SEEDS under the protocol: the 0 and the 1 of
-# normalised scores. Measured by ``python -m agents.benchmark --methods random-v2 heuristic-v2
-# random-v1 heuristic-v1 random-v0 heuristic-v0`` (benchmark.json, "reference_measured"); fixed
-# here so that every paper normalises alike. (Random play tilts Pinball-v2 in each ball's first
-# seconds: 3 of its 4 actions nudge.)
+# normalised scores. Measured by ``python -m agents.benchmark --methods random-v3 heuristic-v3
+# random-v2 heuristic-v2 random-v1 heuristic-v1 random-v0 heuristic-v0`` (benchmark.json,
+# "reference_measured"); fixed here so that every paper normalises alike. (Random play tilts
+# Pinball-v2 and -v3 in each ball's first seconds: 3 of its 4 actions nudge.)
 REFERENCE_SCORES: dict[str, dict[str, float]] = {
+    "Pinball-v3": {"random": 13.8, "heuristic": 158914.8},
     "Pinball-v2": {"random": 3.8, "heuristic": 49423.4},
     "Pinball-v1": {"random": 6402.7, "heuristic": 53590.7},
     "Pinball-v0": {"random": 4140.6, "heuristic": 6392.2},

@@ -15,7 +15,7 @@ a restart or when the play tool's window is closed, and the file is rewritten as
     {
       "format": "pinball-env-recording",  "version": 1,   // 2 with the cabinet (below)
       "package_version": "0.1.0",          // pinball_env.__version__
-      "env_id": "Pinball-v0",              // or "Pinball-v1", "Pinball-v2"
+      "env_id": "Pinball-v0",              // or "Pinball-v1", "-v2", "-v3"
       "options": {"table": "classic"},     // every gym.make option passed
       "max_episode_steps": 7200,           // the TimeLimit of the env played
       "table_sha256": "...",               // the table played (a table file may change)
@@ -50,7 +50,7 @@ import gymnasium as gym
 from pinball_env import __version__  # importing the package registers the envs
 from pinball_env.table import Table, table_to_dict
 
-ENV_IDS = ("Pinball-v0", "Pinball-v1", "Pinball-v2")  # the envs a recording can be of
+ENV_IDS = ("Pinball-v0", "Pinball-v1", "Pinball-v2", "Pinball-v3")  # what may be recorded
 FORMAT = "pinball-env-recording"
 # Format versions, by their actions: 1, digits 0-3 (a table without a cabinet); 2, base-32
 # characters 0-9a-v (the cabinet's 32 actions). A recording is written in the first that holds

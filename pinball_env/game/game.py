@@ -259,8 +259,7 @@ class Game:
         state.on_plunger[envs] = False
         state.plunger_pull[envs] = 0.0
         if self.multi is not None:
-            for env in envs:
-                self.multi.sync(int(env))
+            self.multi.sync_envs(envs)
         self._moved(envs)
 
     def serve(self, env: int) -> None:
@@ -378,11 +377,10 @@ class Game:
             physics = None if swept else progress.stage == PHYSICS
             if physics is not None and physics.any():
                 if multi is not None:
-                    stepped = np.flatnonzero(physics)
-                    multi.before_frame(stepped, rngs)
+                    multi.before_frame(np.flatnonzero(physics), rngs)
                 self.world.step(None, physics)
                 if multi is not None:
-                    multi.after_frame(stepped)
+                    multi.after_frame(physics)
                 progress.stage[physics] = AFTER_PHYSICS
                 if self.on_frame is not None:
                     self.on_frame()

@@ -53,7 +53,7 @@ within its reach stop.
 Sensors, spinners and dark kickbacks are crossed on each ball's moves (:func:`cross_lines`); a
 lit kickback's line is an event of the ball that crosses it (it fires: the ball leaves at the
 kick). A drop target hit drops at the end of the substep; a bank rises only when no ball in
-play is within a radius of it (:func:`raise_banks_multi`).
+play is within a radius of it (``targets.raise_banks``).
 
 Differences from ``step_ball`` (the games use it as it is; Pinball-v3): contacts
 between balls are not logged in ``State.contacts`` nor counted in ``State.hits`` (they have no
@@ -128,15 +128,15 @@ from pinball_env.physics.step import (
     unwedge,
     within_reach,
 )
-from pinball_env.physics.sweep import INF, norm, point_segment_distance
+from pinball_env.physics.sweep import INF, norm
 from pinball_env.physics.targets import (
     count_kickbacks,
     kickback_crossing,
-    record_crossings,
+    record_near_crossings,
     sensor_crossing,
     spin_spinner,
     sweep_drop_targets,
-    turn_spinner,
+    update_targets,
 )
 
 # A ball's cached earliest element contact, array of shape (N, M, EVENT_SIZE), float64.
@@ -289,40 +289,6 @@ def hold_flippers(x, y, r, flippers, angle, omegas, stops, targets, elapsed, pus
 
 
 @njit(cache=True)
-def raise_banks_multi(geometry, state, env, balls, active, r, dt):
-    """``targets.raise_banks`` with every ball in play: a bank rises only when no ball in play
-    lies within a radius of one of its targets."""
-    bank_of, targets = geometry.drop_target_bank, geometry.drop_targets
-    up, clock = state.targets_up[env], state.bank_clock[env]
-    for bank in range(geometry.bank_reset.shape[0]):
-        down = True
-        for j in range(targets.shape[0]):
-            if bank_of[j] == bank and up[j]:
-                down = False
-        if not down:
-            clock[bank] = 0.0
-            continue
-        clock[bank] += dt
-        if clock[bank] < geometry.bank_reset[bank]:
-            continue
-        clear = True
-        for i in range(balls.shape[0]):
-            for j in range(targets.shape[0] if active[i] else 0):
-                t = targets[j]
-                x, y = balls[i, BALL_X], balls[i, BALL_Y]
-                if (
-                    bank_of[j] == bank
-                    and point_segment_distance(x, y, t[0], t[1], t[2], t[3]) < 2 * r
-                ):
-                    clear = False
-        if clear:
-            for j in range(targets.shape[0]):
-                if bank_of[j] == bank:
-                    up[j] = True
-            clock[bank] = 0.0
-
-
-@njit(cache=True)
 def wedge(ball, w, remaining, h, geometry, angle, omegas, stops, targets, angles, r, skin, cut):
     """Ball ``ball`` (its bookkeeping row ``w``) stops moving for the rest of the substep,
     ``remaining`` seconds before its end, as a wedged ball does in ``step.step_ball``: unless
@@ -403,7 +369,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     reach2 = 2.0 * r
     segments, bounds = geometry.segments, geometry.segment_bounds
     one_sided, circles = geometry.segment_one_sided, geometry.circles
-    flippers, sensors = geometry.flippers, geometry.sensors
+    flippers = geometry.flippers
     n_flippers = flippers.shape[0]
     gravity = norm(settings.gravity_x, settings.gravity_y)
     balls, active, fixed = multi.balls[env], multi.active[env], multi.held[env]
@@ -562,24 +528,18 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 nr, ne = near[i], near_ends[i]
                 if n_lines > 0:
                     cross_lines(state, env, geometry, x, y, vx, vy, dt, k * h + elapsed)
-                crossed = False
-                for s in range(ne[NEAR_DROP_TARGETS], ne[NEAR_SENSORS]):
-                    if sensor_crossing(x, y, vx * dt, vy * dt, sensors[nr[s]]) < INF:
-                        crossed = True
-                        break
-                if crossed:
-                    drain = record_crossings(
-                        state, env, geometry, x, y, vx * dt, vy * dt, k * h + elapsed, dt,
-                        scratch.crossings[env],
-                    )  # fmt: skip
-                    if drain < INF:
-                        balls[i, BALL_X] = x + vx * dt * drain
-                        balls[i, BALL_Y] = y + vy * dt * drain
-                        active[i] = False
-                        work[i, W_MOVING] = 0.0
-                        work[i, W_CHECK] = 0.0
-                        moving -= 1
-                        continue
+                drain = record_near_crossings(
+                    state, env, geometry, x, y, vx * dt, vy * dt, k * h + elapsed, dt,
+                    scratch.crossings[env], nr, ne[NEAR_DROP_TARGETS], ne[NEAR_SENSORS],
+                )  # fmt: skip
+                if drain < INF:
+                    balls[i, BALL_X] = x + vx * dt * drain
+                    balls[i, BALL_Y] = y + vy * dt * drain
+                    active[i] = False
+                    work[i, W_MOVING] = 0.0
+                    work[i, W_CHECK] = 0.0
+                    moving -= 1
+                    continue
                 balls[i, BALL_X] = x + vx * dt
                 balls[i, BALL_Y] = y + vy * dt
             remaining -= dt
@@ -721,12 +681,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
         for j in range(n_flippers):
             angle[j], omega[j] = flipper_end(angle[j], targets[j], omegas[j], stops[j], False, h, h)
     if n_targets > 0 or geometry.spinners.shape[0] > 0:
-        spinner_id = target_id + n_targets
-        for j in range(geometry.spinners.shape[0]):
-            state.hits[env, spinner_id + j] += turn_spinner(
-                geometry.spinners[j], state.spinners[env, j], settings.dt
-            )
-        raise_banks_multi(geometry, state, env, balls, active, r, settings.dt)
+        update_targets(geometry, state, env, balls, active, r, settings.dt)
     finite = True
     for i in range(n_balls):
         b = balls[i]

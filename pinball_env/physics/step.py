@@ -86,8 +86,7 @@ from pinball_env.physics.sweep import (
 )
 from pinball_env.physics.targets import (
     cross_target_lines,
-    record_crossings,
-    sensor_crossing,
+    record_near_crossings,
     sweep_drop_targets,
     update_targets,
 )
@@ -461,7 +460,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     tol = FLIPPER_CONTACT_TOLERANCE * settings.skin
     segments, bounds = geometry.segments, geometry.segment_bounds
     one_sided, circles = geometry.segment_one_sided, geometry.circles
-    flippers, sensors = geometry.flippers, geometry.sensors
+    flippers = geometry.flippers
     n_flippers = flippers.shape[0]
     skin = settings.skin
     gravity = norm(settings.gravity_x, settings.gravity_y)
@@ -550,23 +549,17 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                     )
                 else:
                     used = remaining * min(t, 1.0)
-                # Sensor crossings on the way to the contact (or to the end of the substep),
-                # after a cheap test that rules out the common case.
-                crossed = False
-                for i in range(near_ends[NEAR_DROP_TARGETS], near_ends[NEAR_SENSORS]):
-                    if sensor_crossing(x, y, vx * used, vy * used, sensors[near[i]]) < INF:
-                        crossed = True
-                        break
-                if crossed:
-                    drain = record_crossings(
-                        state, env, geometry, x, y, vx * used, vy * used, k * h + elapsed, used,
-                        scratch.crossings[env],
-                    )  # fmt: skip
-                    if drain < INF:
-                        x += vx * used * drain
-                        y += vy * used * drain
-                        state.active[env] = False
-                        break
+                # Sensor crossings on the way to the contact (or to the end of the substep).
+                drain = record_near_crossings(
+                    state, env, geometry, x, y, vx * used, vy * used, k * h + elapsed, used,
+                    scratch.crossings[env], near, near_ends[NEAR_DROP_TARGETS],
+                    near_ends[NEAR_SENSORS],
+                )  # fmt: skip
+                if drain < INF:
+                    x += vx * used * drain
+                    y += vy * used * drain
+                    state.active[env] = False
+                    break
                 x += vx * used
                 y += vy * used
                 remaining -= used
@@ -663,7 +656,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     ball[BALL_X], ball[BALL_Y] = x, y
     ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
     if has_targets:
-        update_targets(geometry, state, env, x, y, r, settings.dt)
+        update_targets(geometry, state, env, state.balls[env : env + 1],
+                       state.active[env : env + 1], r, settings.dt)  # fmt: skip
     return math.isfinite(x + y + vx + vy + spin)
 
 

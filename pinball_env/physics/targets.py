@@ -26,6 +26,8 @@ import math
 from numba import njit
 
 from pinball_env.physics.columns import (
+    BALL_X,
+    BALL_Y,
     KICKBACK_VX,
     KICKBACK_VY,
     SPIN_ANGLE,
@@ -87,11 +89,11 @@ def turn_spinner(spinner, spin, dt):
 
 
 @njit(cache=True)
-def raise_banks(geometry, state, env, x, y, r, dt):
+def raise_banks(geometry, state, env, balls, active, r, dt):
     """Advance the clock of every bank of env ``env`` whose targets are all down by ``dt``, and
-    stand a bank up once its clock reaches its reset time, unless the ball in play (at (x, y),
-    radius ``r``) lies within a radius of one of its targets: then it waits for the ball to
-    leave."""
+    stand a bank up once its clock reaches its reset time, unless a ball in play (``balls``
+    (M, 5) where ``active`` (M,), radius ``r``) lies within a radius of one of its targets: then
+    it waits for the ball to leave."""
     bank_of, targets = geometry.drop_target_bank, geometry.drop_targets
     up, clock = state.targets_up[env], state.bank_clock[env]
     for bank in range(geometry.bank_reset.shape[0]):
@@ -107,10 +109,15 @@ def raise_banks(geometry, state, env, x, y, r, dt):
         if clock[bank] < geometry.bank_reset[bank]:
             continue
         clear = True
-        for j in range(targets.shape[0] if state.active[env] else 0):
-            t = targets[j]
-            if bank_of[j] == bank and point_segment_distance(x, y, t[0], t[1], t[2], t[3]) < 2 * r:
-                clear = False
+        for i in range(balls.shape[0]):
+            x, y = balls[i, BALL_X], balls[i, BALL_Y]
+            for j in range(targets.shape[0] if active[i] else 0):
+                t = targets[j]
+                if (
+                    bank_of[j] == bank
+                    and point_segment_distance(x, y, t[0], t[1], t[2], t[3]) < 2 * r
+                ):
+                    clear = False
         if clear:
             for j in range(targets.shape[0]):
                 if bank_of[j] == bank:
@@ -119,14 +126,15 @@ def raise_banks(geometry, state, env, x, y, r, dt):
 
 
 @njit(cache=True)
-def update_targets(geometry, state, env, x, y, r, dt):
-    """Env ``env``'s targets at the end of a frame of ``dt`` seconds, the ball at (x, y): the
-    spinners turn (their revolutions counted as hits), the banks rise."""
+def update_targets(geometry, state, env, balls, active, r, dt):
+    """Env ``env``'s targets at the end of a frame of ``dt`` seconds, its balls ``balls`` (M, 5)
+    in play where ``active`` (M,) (one ball: ``state.balls[env : env + 1]``): the spinners turn
+    (their revolutions counted as hits), the banks rise."""
     spinner_id = first_spinner(geometry)
     for j in range(geometry.spinners.shape[0]):
         turns = turn_spinner(geometry.spinners[j], state.spinners[env, j], dt)
         state.hits[env, spinner_id + j] += turns
-    raise_banks(geometry, state, env, x, y, r, dt)
+    raise_banks(geometry, state, env, balls, active, r, dt)
 
 
 # --- crossings: sensors, kickbacks, drop targets --------------------------------------------------
@@ -179,6 +187,18 @@ def record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossi
             state.hits[env, offset + j] += 1
             log_contact(state, env, offset + j, start + duration * crossings[j], 0.0)
     return drain
+
+
+@njit(cache=True)
+def record_near_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings, near,
+                          first, end):  # fmt: skip
+    """:func:`record_crossings` of the move, after a cheap test that rules out the common case:
+    where the ball crosses none of the sensors ``near[first:end]`` (its candidate set's), it
+    crosses none; returns inf then."""
+    for i in range(first, end):
+        if sensor_crossing(x, y, dx, dy, geometry.sensors[near[i]]) < INF:
+            return record_crossings(state, env, geometry, x, y, dx, dy, start, duration, crossings)
+    return INF
 
 
 @njit(cache=True)

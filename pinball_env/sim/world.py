@@ -17,24 +17,26 @@ other table by ``step_world`` exactly as before. Code written once for any numbe
 ``state.active``) are ball 0's for one ball; with several they are not the balls: ``balls`` and
 ``active`` raise, ``state.balls`` and ``state.active`` are left unused.
 
-Saucers and locks are played here, at the end of each frame (after the physics, for either
-backend): a free ball in play within a saucer's ``radius`` of its centre and slower than its
-``capture_speed`` is captured (held at the centre, at rest), counted as a hit of the saucer (its
-element id follows the kickbacks: ``frame_points`` scores it) and released at its ``kick``
-after ``hold_time``; a lock holds a ball that comes within ``Lock.capture_radius`` of its next
-free slot (slots fill in order) slower than its ``capture_speed``, a hit of the lock, until
-:meth:`World.release_lock` lets its balls go at its ``kick``. A released ball is not captured
-again by the same saucer or lock until it has left its capture radius. The test is on the
-frame's end state (a ball slow enough to be captured moves less than a centimetre a frame).
+Saucers and locks are played here, at the end of each frame (after the physics, for either backend;
+every env in one compiled pass, :func:`play_holders`): a free ball in play within a saucer's
+``radius`` of its centre and slower than its ``capture_speed`` is captured (held at the centre, at
+rest), counted as a hit of the saucer (its element id follows the kickbacks: ``frame_points`` scores
+it) and released at its ``kick`` after ``hold_time``; a lock holds a ball that comes within
+``Lock.capture_radius`` of its next free slot (slots fill in order) slower than its
+``capture_speed``, a hit of the lock, until :meth:`World.release_lock` lets its balls go at its
+``kick``. A released ball is not captured again by the same saucer or lock until it has left its
+capture radius. The test is on the frame's end state (a ball slow enough to be captured moves less
+than a centimetre a frame).
 """
 
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numba
 import numpy as np
+from numba import njit
 
 from pinball_env.physics import (
     CONTACT_CAPACITY,
@@ -85,6 +87,170 @@ def compiled_entry(function: Callable[..., Any], args: tuple) -> Callable[..., A
     if overloads is None:
         return function
     return overloads[tuple(numba.typeof(arg) for arg in args)].entry_point
+
+
+class Holders(NamedTuple):
+    """A table's saucers and locks as :func:`play_holders` reads them (the table's numbers)."""
+
+    saucer_ids: np.ndarray  # (S,) int64: element ids
+    saucer_center: np.ndarray  # (S, 2) float64 [m]
+    saucer_radius: np.ndarray  # (S,) float64 [m]
+    saucer_capture: np.ndarray  # (S,) float64: capture speed [m/s]
+    saucer_hold: np.ndarray  # (S,) float64: hold time [s]
+    saucer_kick: np.ndarray  # (S, 2) float64 [m/s]
+    lock_ids: np.ndarray  # (K,) int64: element ids
+    lock_slots: np.ndarray  # (K, MAX_LOCK_SLOTS, 2) float64: the slots, in fill order [m]
+    lock_n_slots: np.ndarray  # (K,) int64: slots of each lock
+    lock_reach: np.ndarray  # (K,) float64: capture radius [m]
+    lock_capture: np.ndarray  # (K,) float64: capture speed [m/s]
+    lock_kick: np.ndarray  # (K, 2) float64 [m/s]
+
+
+def holder_arrays(table: Table, saucer_ids: np.ndarray, lock_ids: np.ndarray) -> Holders:
+    """``table``'s saucers and locks (element ids ``saucer_ids``, ``lock_ids``) as arrays."""
+    saucers, locks = table.saucers, table.locks
+    n_slots = max((len(lock.slots) for lock in locks), default=0)
+    slots = np.zeros((len(locks), n_slots, 2))
+    for k, lock in enumerate(locks):
+        slots[k, : len(lock.slots)] = lock.slots
+    r = table.ball.radius
+    return Holders(
+        saucer_ids=np.asarray(saucer_ids, dtype=np.int64),
+        saucer_center=np.array([s.center for s in saucers], dtype=np.float64).reshape(-1, 2),
+        saucer_radius=np.array([s.radius for s in saucers], dtype=np.float64),
+        saucer_capture=np.array([s.capture_speed for s in saucers], dtype=np.float64),
+        saucer_hold=np.array([s.hold_time for s in saucers], dtype=np.float64),
+        saucer_kick=np.array([s.kick for s in saucers], dtype=np.float64).reshape(-1, 2),
+        lock_ids=np.asarray(lock_ids, dtype=np.int64),
+        lock_slots=slots,
+        lock_n_slots=np.array([len(lock.slots) for lock in locks], dtype=np.int64),
+        lock_reach=np.array([lock.capture_radius(r) for lock in locks], dtype=np.float64),
+        lock_capture=np.array([lock.capture_speed for lock in locks], dtype=np.float64),
+        lock_kick=np.array([lock.kick for lock in locks], dtype=np.float64).reshape(-1, 2),
+    )
+
+
+@njit(cache=True)
+def _place(balls, active, held, holder, slot, held_time, released_from, env, ball, x, y, vx,
+           vy):  # fmt: skip
+    """``World.place_ball`` of a checked state: in play, free, at (x, y), (vx, vy), no spin."""
+    balls[env, ball, :] = 0.0
+    balls[env, ball, BALL_X], balls[env, ball, BALL_Y] = x, y
+    balls[env, ball, BALL_VX], balls[env, ball, BALL_VY] = vx, vy
+    active[env, ball] = True
+    holder[env, ball] = slot[env, ball] = -1
+    held_time[env, ball] = 0.0
+    held[env, ball] = False
+    released_from[env, ball] = -1
+
+
+@njit(cache=True)
+def _capture(balls, active, held, holder, slot, held_time, released_from, state, env, ball,
+             element, x, y, into, dt):  # fmt: skip
+    """Hold env ``env``'s ball ``ball`` at (x, y) for ``element`` (slot ``into`` of a lock): a
+    hit of it, logged at the frame's end (``World.hold_ball`` and the hit)."""
+    speed = math.hypot(balls[env, ball, BALL_VX], balls[env, ball, BALL_VY])
+    _place(balls, active, held, holder, slot, held_time, released_from, env, ball, x, y, 0.0, 0.0)
+    held[env, ball] = True
+    holder[env, ball], slot[env, ball] = element, into
+    state.hits[env, element] += 1
+    log_contact(state, env, element, dt, speed)
+
+
+# One body over every env, as the kernel's: the saucers, then the locks, each as the Python of
+# the first version did it table-wide (so the order of captures and releases is the same).
+@njit(cache=True)
+def play_holders(balls, active, held, holder, slot, held_time, released_from, state, stepped,
+                 holders, dt):  # fmt: skip
+    """The saucers and locks of every env at the end of a frame (module docstring), of the
+    frame's end state (``balls`` (N, M, 5) ...; ``state`` the kernel's, for the hits and the
+    contact log): in envs where ``stepped`` is set, a saucer's held ball counts ``dt`` and
+    leaves at the kick after its hold time, a free ball in play near a free saucer or the next
+    free slot of a lock, slower than its capture speed, is captured; in every env a ball
+    released from one is forgotten by it once out of its reach."""
+    n_envs, n_balls = active.shape
+    h = holders
+    xy = np.empty((n_balls, 2))
+    speed = np.empty(n_balls)
+    free = np.empty(n_balls, dtype=np.bool_)
+    taken = np.zeros(h.lock_slots.shape[1], dtype=np.bool_)
+    gaps = np.empty((n_balls, h.lock_slots.shape[1]))
+    for env in range(n_envs):
+        go = stepped[env]
+        for ball in range(n_balls):  # the frame's end state, before any capture or release
+            xy[ball, 0], xy[ball, 1] = balls[env, ball, BALL_X], balls[env, ball, BALL_Y]
+            speed[ball] = math.hypot(balls[env, ball, BALL_VX], balls[env, ball, BALL_VY])
+            free[ball] = active[env, ball] and not held[env, ball] and go
+        for s in range(len(h.saucer_ids)):
+            element = h.saucer_ids[s]
+            cx, cy = h.saucer_center[s, 0], h.saucer_center[s, 1]
+            if go:
+                for ball in range(n_balls):
+                    if holder[env, ball] == element:
+                        held_time[env, ball] += dt
+                for ball in range(n_balls):
+                    if holder[env, ball] == element and held_time[env, ball] >= (
+                        h.saucer_hold[s] - 1e-9
+                    ):
+                        _place(balls, active, held, holder, slot, held_time, released_from, env,
+                               ball, balls[env, ball, BALL_X], balls[env, ball, BALL_Y],
+                               h.saucer_kick[s, 0], h.saucer_kick[s, 1])  # fmt: skip
+                        released_from[env, ball] = element
+            catch = -1
+            for ball in range(n_balls):
+                near = math.hypot(xy[ball, 0] - cx, xy[ball, 1] - cy) <= h.saucer_radius[s]
+                if released_from[env, ball] == element and not near:
+                    released_from[env, ball] = -1
+                if (
+                    catch < 0
+                    and free[ball]
+                    and near
+                    and speed[ball] < h.saucer_capture[s]
+                    and released_from[env, ball] != element
+                ):
+                    catch = ball
+            if catch >= 0:
+                busy = False  # one ball at a time
+                for ball in range(n_balls):
+                    busy |= holder[env, ball] == element
+                if not busy:
+                    _capture(balls, active, held, holder, slot, held_time, released_from, state,
+                             env, catch, element, cx, cy, 0, dt)  # fmt: skip
+                    free[catch] = False
+        for k in range(len(h.lock_ids)):
+            element, reach, n_slots = h.lock_ids[k], h.lock_reach[k], h.lock_n_slots[k]
+            for ball in range(n_balls):
+                nearest = math.inf
+                for j in range(n_slots):
+                    gap = math.hypot(xy[ball, 0] - h.lock_slots[k, j, 0],
+                                     xy[ball, 1] - h.lock_slots[k, j, 1])  # fmt: skip
+                    gaps[ball, j] = gap
+                    nearest = min(nearest, gap)
+                if released_from[env, ball] == element and nearest > reach:
+                    released_from[env, ball] = -1
+            taken[:] = False
+            for ball in range(n_balls):
+                if holder[env, ball] == element:
+                    taken[slot[env, ball]] = True
+            for ball in range(n_balls):
+                if not (
+                    free[ball]
+                    and speed[ball] < h.lock_capture[k]
+                    and released_from[env, ball] != element
+                ):
+                    continue
+                into = -1
+                for j in range(n_slots):
+                    if not taken[j]:
+                        into = j
+                        break
+                if into < 0 or gaps[ball, into] > reach:
+                    continue
+                _capture(balls, active, held, holder, slot, held_time, released_from, state, env,
+                         ball, element, h.lock_slots[k, into, 0], h.lock_slots[k, into, 1], into,
+                         dt)  # fmt: skip
+                taken[into] = True
+                free[ball] = False
 
 
 class World:
@@ -146,6 +312,7 @@ class World:
         self.saucer_ids = np.arange(first, first + len(table.saucers))
         self.lock_ids = np.arange(first + len(table.saucers),
                                   first + len(table.saucers) + len(table.locks))  # fmt: skip
+        self._holders = holder_arrays(table, self.saucer_ids, self.lock_ids)
         shape = (n_envs, self.n_balls)
         self.holder = np.full(shape, -1, dtype=np.int64)
         self.slot = np.full(shape, -1, dtype=np.int64)
@@ -319,56 +486,14 @@ class World:
             self.released_from[env, ball] = element
         return len(balls)
 
-    def _capture(self, env: int, ball: int, element: int, position: tuple, slot: int) -> None:
-        speed = float(np.hypot(*self.ball_states[env, ball, [BALL_VX, BALL_VY]]))
-        self.hold_ball(env, ball, position)
-        self.holder[env, ball], self.slot[env, ball] = element, slot
-        self.state.hits[env, element] += 1
-        log_contact(self.state, env, element, self.settings.dt, speed)
-
     def _play_holders(self, envs: np.ndarray | None) -> None:
-        """The saucers and locks at the end of a frame (module docstring): held saucer balls
-        count their time and leave at the kick; free slow balls near a free saucer or the next
-        free slot of a lock are captured."""
-        table, r, dt = self.table, self.settings.radius, self.settings.dt
-        states, active, held = self.ball_states, self.ball_active, self.multi.held
-        stepped = np.ones(self.n_envs, bool) if envs is None else np.asarray(envs, dtype=bool)
-        xy = states[..., [BALL_X, BALL_Y]]
-        speed = np.hypot(states[..., BALL_VX], states[..., BALL_VY])
-        free = active & ~held & stepped[:, None]
-        for s, saucer in enumerate(table.saucers):
-            element = int(self.saucer_ids[s])
-            mine = (self.holder == element) & stepped[:, None]
-            self.held_time[mine] += dt
-            due = mine & (self.held_time >= saucer.hold_time - 1e-9)
-            for env, ball in zip(*np.nonzero(due), strict=True):
-                self.release_ball(int(env), int(ball), saucer.kick)
-                self.released_from[env, ball] = element
-            near = np.hypot(*(xy - saucer.center).transpose(2, 0, 1)) <= saucer.radius
-            self.released_from[(self.released_from == element) & ~near] = -1
-            catch = free & near & (speed < saucer.capture_speed)
-            catch &= self.released_from != element
-            for env in np.flatnonzero(catch.any(axis=1)):
-                if (self.holder[env] == element).any():
-                    continue  # one ball at a time
-                ball = int(np.flatnonzero(catch[env])[0])
-                self._capture(int(env), ball, element, saucer.center, 0)
-                free[env, ball] = False
-        for k, lock in enumerate(table.locks):
-            element, reach = int(self.lock_ids[k]), lock.capture_radius(r)
-            slots = np.asarray(lock.slots)
-            gaps = np.hypot(*(xy[:, :, None, :] - slots).transpose(3, 0, 1, 2))  # (N, M, slots)
-            self.released_from[(self.released_from == element) & (gaps.min(axis=2) > reach)] = -1
-            catch = free & (speed < lock.capture_speed) & (self.released_from != element)
-            for env in np.flatnonzero(catch.any(axis=1)):
-                taken = set(self.slot[env, self.holder[env] == element].tolist())
-                for ball in np.flatnonzero(catch[env]):
-                    slot = next((j for j in range(len(slots)) if j not in taken), -1)
-                    if slot < 0 or gaps[env, ball, slot] > reach:
-                        continue
-                    self._capture(int(env), int(ball), element, lock.slots[slot], slot)
-                    taken.add(slot)
-                    free[env, ball] = False
+        """The saucers and locks at the end of a frame (module docstring), every env in one
+        compiled pass (:func:`play_holders`)."""
+        stepped = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
+        multi = self.multi
+        play_holders(multi.balls, multi.active, multi.held, self.holder, self.slot,
+                     self.held_time, self.released_from, self.state, stepped, self._holders,
+                     self.settings.dt)  # fmt: skip
 
     def launch_balls(self, envs: Sequence[int], speeds: Sequence[float]) -> None:
         """:meth:`launch` for each of ``envs`` at its entry of ``speeds`` [m/s], at once."""

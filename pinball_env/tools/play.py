@@ -1,4 +1,4 @@
-"""Play ``Pinball-v0``, ``-v1`` or ``-v2`` on the keyboard: ``python -m pinball_env.tools.play``.
+"""Play ``Pinball-v0`` to ``-v3`` on the keyboard: ``python -m pinball_env.tools.play``.
 
 ``python -m pinball_env.tools.play [--env ID] [--table NAME] [--seed S] [--record FILE]
 [--protocol]`` opens
@@ -6,9 +6,10 @@ a pygame window (the ``render`` extra) and plays at real speed, one env step per
 table's frame rate, 60 frames per second), with the score and the balls left on the scoreboard.
 ``--env Pinball-v1`` plays the whole cabinet (its table ``classic_v1``): the player's plunger,
 the nudge and the tilt, whose warnings and TILT the scoreboard shows; ``--env Pinball-v2`` the
-same with a tilt that any sustained nudging trips (``classic_v2``). ``--table`` plays another
-table on the env (default: the env's own). ``--protocol`` plays the benchmark protocol's game
-(its env, ``Pinball-v2``, unless ``--env`` names another of it; sticky actions,
+same with a tilt that any sustained nudging trips (``classic_v2``); ``--env Pinball-v3`` v2's
+game with multiball (``classic_v3``: every ball, the lock and the trough drawn). ``--table``
+plays another table on the env (default: the env's own). ``--protocol`` plays the benchmark
+protocol's game (its env, ``Pinball-v3``, unless ``--env`` names another of it; sticky actions,
 ``pinball_env.protocol``): a recording of it is a human score that
 ``python -m agents.evaluate --recording FILE`` scores on the protocol. ``--replay FILE
 [--headless]`` plays a recording back and checks that every game scores what was recorded.
@@ -248,7 +249,7 @@ class PlayLoop:
     :meth:`close` ends the game in play and writes the recording.
 
     ``options``: ``gym.make`` options of ``env_id`` (one of :data:`ENV_IDS`; ``table``
-    defaults to the env's own, ``"classic"``, ``"classic_v1"`` or ``"classic_v2"``; not
+    defaults to the env's own, ``"classic"`` or ``"classic_v1"`` to ``"classic_v3"``; not
     ``render_mode`` or ``action_type``, which the tool sets); ``seed``: the first game's (None:
     a random one; each restart takes the next); ``record``: the recording's path; ``fps``:
     frames per second, None for real speed, 0 for no waiting (tests).
@@ -386,7 +387,7 @@ def parser() -> argparse.ArgumentParser:
         "--env",
         choices=ENV_IDS,
         help=f"the env to play (default {ENV_ID}, or with --protocol {PROTOCOL_ENV_IDS[0]}; "
-        "Pinball-v1 and -v2: the plunger, nudge and tilt)",
+        "Pinball-v1 to -v3: the plunger, nudge and tilt)",
     )
     parser.add_argument("--table", help="table name or YAML path (default: the env's own)")
     parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")

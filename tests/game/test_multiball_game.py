@@ -8,7 +8,9 @@ from hypothesis import strategies as st
 
 from pinball_env.game import Game
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
-from pinball_env.table import load_table
+from pinball_env.procgen import generate_table
+from pinball_env.table import load_table, table_from_dict, table_to_dict
+from pinball_env.table.reachable import CELL
 
 TABLE = load_table("classic_v3")
 NOOP = np.array([0])
@@ -184,6 +186,62 @@ def test_random_play_keeps_every_ball_sound(seed):
             for j in range(i):
                 assert np.hypot(*(xy[i] - xy[j])) >= 2 * r - skin - 1e-9
         assert (np.abs(balls[active][:, [BALL_VX, BALL_VY]]) < 100.0).all()
+
+
+def with_a_lock(table):
+    """``table`` (a generated one) with a trough of three balls and a two-slot lock where a ball
+    in play can get to, clear of every element: the first place in its upper half, scanned
+    from the top left, whose slots have a free disc of two ball radii around each."""
+    data = table_to_dict(table)
+    data["materials"] = {**data["materials"], "steel": {"restitution": 0.95, "friction": 0.1}}
+    data["ball"] = {**data["ball"], "material": "steel"}
+    data["trough"] = {"balls": 3, "auto_plunger": {"speed": [2.5, 3.0]}}
+    free, r = table.free_space, table.ball.radius
+    angles = np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)
+    ring = 2.0 * r * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+
+    def clear(x, y):
+        cells = np.round((np.array([x, y]) + ring) / CELL).astype(int)
+        inside = (cells >= 0).all() and (cells < free.shape[::-1]).all()
+        return inside and free[cells[:, 1], cells[:, 0]].all()
+
+    for y in np.arange(0.85, 0.5, -0.01) * table.height:
+        for x in np.arange(0.1, 0.9, 0.02) * table.width:
+            if clear(x, y) and clear(x, y - 3.0 * r):
+                slots = [[float(x), float(y)], [float(x), float(y - 3.0 * r)]]
+                data["locks"] = [{"name": "lock", "slots": slots, "capture_speed": 1.0,
+                                  "kick": [0.3, -0.5], "score": 100}]  # fmt: skip
+                return table_from_dict(data, f"<{table.name} with a lock>")
+    raise AssertionError(f"no place for a lock on {table.name}")
+
+
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 200))
+def test_random_play_on_generated_tables_with_a_lock_keeps_every_ball_sound(seed):
+    """A generated table (with targets) given a trough of three balls and a lock: random
+    flipping with two extra balls queued whenever no multiball runs, 1200 steps
+    (the lock takes balls in most of them): the balls stay sound (no overlap beyond the skin,
+    on the table, finite)."""
+    table = with_a_lock(generate_table(seed, "easy", True))
+    game = Game(table, 1)
+    rng = np.random.default_rng(seed)
+    game.new_game(0, rng)
+    r, skin = table.ball.radius, table.simulation.skin
+    actions = np.random.default_rng(seed).integers(0, len(game.discrete_buttons), 1200)
+    for action in actions:
+        if game.state.balls_left[0] == 0:
+            game.new_game(0, rng)
+        if game.state.pending_balls[0] == 0 and not game.state.multiball[0]:
+            game.state.pending_balls[0] = 2
+        game.step(np.array([action]), [rng])
+        balls = game.world.ball_states[0]
+        assert np.isfinite(balls).all()
+        active = np.flatnonzero(game.world.ball_active[0])
+        xy = balls[active][:, [BALL_X, BALL_Y]]
+        assert ((xy >= 0.0) & (xy <= (table.width, table.height))).all()
+        for i in range(len(active)):
+            for j in range(i):
+                assert np.hypot(*(xy[i] - xy[j])) >= 2 * r - skin - 1e-9
 
 
 # --- the ball search and the tilt watch every ball -----------------------------------------

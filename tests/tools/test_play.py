@@ -310,7 +310,7 @@ def _delete(key: str) -> Callable[[dict[str, Any]], None]:
         (_set("games", 0, "frames", -1), r"games\[0\]\.frames must be >= 0"),
         (_set("games", []), r"holds no game"),
         (_set("options", "render_mode", "human"), r"options\.render_mode is set by the play"),
-        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0', 'Pinball-v1' or 'Pinball-v2' games"),
+        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0', 'Pinball-v1', 'Pinball-v2' or 'Pinball-v3' games"),
         (_set("table_sha256", "abc"), r"table_sha256 must be 64"),
     ],
 )
@@ -522,7 +522,8 @@ def test_the_play_loop_acts_as_the_key_map_and_on_any_number_of_keys(env_id):
 
 def test_the_play_tool_plays_only_pinball_envs():
     with pytest.raises(
-        ValueError, match="plays Pinball-v0, Pinball-v1 or Pinball-v2, not 'CartPole-v1'"
+        ValueError,
+        match="plays Pinball-v0, Pinball-v1, Pinball-v2 or Pinball-v3, not 'CartPole-v1'",
     ):
         play.PlayLoop(env_id="CartPole-v1")
 
@@ -576,6 +577,20 @@ def test_a_cabinet_recording_replays(cabinet_recorded, capsys):
     assert path.with_name("copy.json").read_text() == path.read_text()
 
 
+def test_a_pinball_v3_game_is_played_recorded_and_replayed(tmp_path):
+    """Pinball-v3 (multiball's table): a game is played in the window, recorded and replayed to
+    its score."""
+    path = tmp_path / "v3.json"
+    session = play.PlayLoop({"balls": 1}, seed=4, record=path, fps=0, env_id="Pinball-v3")
+    script = {0: [down(pygame.K_DOWN)], 40: [up(pygame.K_DOWN)], 200: [down(pygame.K_z)],
+              260: [up(pygame.K_z)]}  # fmt: skip
+    session.run(scripted(script), max_frames=400)
+    session.close()
+    data = json.loads(path.read_text())
+    assert data["env_id"] == "Pinball-v3" and data["options"]["table"] == "classic_v3"
+    assert play.replay(load_recording(path)) == [game.score for game in session.games]
+
+
 def test_a_cabinet_recording_on_a_table_without_the_cabinet_is_refused(cabinet_recorded):
     def to_classic(data: dict[str, Any]) -> None:
         data["env_id"], data["options"]["table"] = "Pinball-v0", "classic"
@@ -617,7 +632,7 @@ def test_a_recording_from_before_the_cabinet_replays_and_writes_back_the_same(tm
     assert (tmp_path / "again.json").read_text() == text
 
 
-def test_the_command_line_plays_pinball_v1_and_the_protocols_v2(tmp_path, monkeypatch, capsys):
+def test_the_command_line_plays_pinball_v1_and_the_protocols_v3(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(play, "has_display", lambda: True)  # SDL's dummy driver shows it
     monkeypatch.setattr(play.PlayLoop, "run", lambda loop: play.PlayLoop.tick(loop))
     scores = play.main(["--env", "Pinball-v1", "--seed", "2", "--record", str(tmp_path / "r.json")])
@@ -635,8 +650,8 @@ def test_the_command_line_plays_pinball_v1_and_the_protocols_v2(tmp_path, monkey
         play.main(["--replay", str(tmp_path / "r.json"), "--env", "Pinball-v1"])
     with pytest.raises(SystemExit):  # argparse: no such env
         play.main(["--env", "Pinball-v9"])
-    # --protocol plays the protocol's env, Pinball-v2, with its sticky actions.
+    # --protocol plays the protocol's env, Pinball-v3, with its sticky actions.
     play.main(["--protocol", "--seed", "3", "--record", str(tmp_path / "p.json")])
     data = json.loads((tmp_path / "p.json").read_text())
-    assert data["env_id"] == "Pinball-v2" and data["options"]["table"] == "classic_v2"
+    assert data["env_id"] == "Pinball-v3" and data["options"]["table"] == "classic_v3"
     assert data["options"]["repeat_action_probability"] == 0.25

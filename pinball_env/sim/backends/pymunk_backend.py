@@ -69,8 +69,7 @@ from pinball_env.physics.columns import (
     PROP_KICK,
     PROP_RESTITUTION,
 )
-from pinball_env.physics.data import first_drop_target, first_kickback, first_spinner, log_contact
-from pinball_env.physics.multiball import raise_banks_multi
+from pinball_env.physics.data import first_drop_target, first_kickback, log_contact
 from pinball_env.physics.step import flipper_end, flipper_motion, is_hit
 from pinball_env.physics.targets import (
     count_kickbacks,
@@ -78,7 +77,6 @@ from pinball_env.physics.targets import (
     record_crossings,
     sensor_crossing,
     spin_spinner,
-    turn_spinner,
     update_targets,
 )
 from pinball_env.sim.world import World
@@ -293,16 +291,11 @@ class _EnvSpace:
         self._sync_ball_out()
         if world.table.has_targets:
             if world.n_balls == 1:
-                ball = state.balls[env]
-                update_targets(geometry, state, env, ball[BALL_X], ball[BALL_Y],
-                               world.table.ball.radius, settings.dt)  # fmt: skip
+                balls, active = state.balls[env : env + 1], state.active[env : env + 1]
             else:
-                spinner_id = first_spinner(geometry)
-                for j in range(geometry.spinners.shape[0]):
-                    turns = turn_spinner(geometry.spinners[j], state.spinners[env, j], settings.dt)
-                    state.hits[env, spinner_id + j] += turns
-                raise_banks_multi(geometry, state, env, world.ball_states[env],
-                                  world.ball_active[env], settings.radius, settings.dt)  # fmt: skip
+                balls, active = world.ball_states[env], world.ball_active[env]
+            update_targets(geometry, state, env, balls, active, world.table.ball.radius,
+                           settings.dt)  # fmt: skip
 
     def _cross_sensors(self, i: int, before: "pymunk.Vec2d") -> None:
         """The kernel's sensor bookkeeping on ball ``i``'s move over the substep just stepped;

@@ -1,4 +1,5 @@
-"""The cross-check's figure: pass-through against speed, bounce errors, flippers, the cabinet."""
+"""The cross-check's figure: pass-through against speed, bounce errors, flippers, the cabinet,
+ball-ball shots."""
 
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ def plot(report: dict[str, Any], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(3, 2, figsize=(11, 12))
+    fig, axes = plt.subplots(4, 2, figsize=(11, 16))
     ax = axes[0, 0]
     tunnel = report["tunnelling"]
     styles = {"wall": "-", "resting flipper": "--", "swinging flipper": ":"}
@@ -74,6 +75,7 @@ def plot(report: dict[str, Any], path: Path) -> None:
     ax.legend(fontsize=7, loc="upper left")
     ax.set_title("Free run paths")
     _plot_cabinet(report, axes[2])
+    _plot_ball_ball(report, axes[3])
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=90)
@@ -114,3 +116,27 @@ def _plot_cabinet(report: dict[str, Any], axes: Any) -> None:
     ax.set_ylabel("error [substeps: apex / (v h), gate time / h]")
     ax.set_title(f"Plunger launches on {CABINET_TABLE} vs analytic")
     ax.legend(fontsize=7)
+
+
+def _plot_ball_ball(report: dict[str, Any], axes: Any) -> None:
+    """The ball-ball shots against the analytic answer: the velocity error and the contact's
+    time error of each shot (head-on, onto a resting ball, oblique; speeds; restitutions)."""
+    rows = report["ball_ball"]
+    labels = [f"{r['shot']}\n{r['speed']:g} m/s e={r['restitution']:g}" for r in rows]
+    x = np.arange(len(rows))
+    width = 0.35
+    panels = (
+        ("velocity_error", 1.0, "velocity error [m/s] (exact shown at 1e-16)", "log", 1e-16),
+        ("contact_time_error", 1e3, "contact time error [ms]", "linear", None),
+    )
+    for ax, (key, scale, ylabel, yscale, floor) in zip(axes, panels, strict=True):
+        for k, (engine, colour) in enumerate(zip(ENGINES, ("tab:blue", "tab:red"), strict=True)):
+            values = np.array([scale * r[engine][key] for r in rows])
+            if floor is not None:
+                values = np.maximum(np.abs(values), floor)
+            ax.bar(x + (k - 0.5) * width, values, width, color=colour, label=engine)
+        ax.set_yscale(yscale)
+        ax.set_xticks(x, labels, rotation=90, fontsize=6)
+        ax.set_ylabel(ylabel)
+        ax.set_title("Ball-ball shots (equal masses) vs analytic")
+        ax.legend(fontsize=7)
