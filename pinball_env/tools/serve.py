@@ -40,13 +40,12 @@ from urllib.parse import urlsplit
 
 import gymnasium as gym
 
-from pinball_env import ENVS
 from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
 from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
-from pinball_env.recording import ENV_IDS as RECORDED_ENV_IDS
 from pinball_env.recording import (
+    ENV_IDS,
     RecordingError,
     default_table,
     load_recording,
@@ -71,7 +70,6 @@ MAX_VIEWERS = 8  # pages at once: each has its own game
 MAX_QUEUED = 32  # messages other than frames waiting for a slow page (the oldest dropped)
 MAX_LATE_FRAMES = 6  # a tick this late skips ahead rather than stepping to catch up
 STATIC = Path(__file__).resolve().parent / "web" / "static"
-ENV_IDS = tuple(env_id for env_id in ENVS if env_id.startswith("Pinball-v"))  # v0 to v3
 WATCHERS = ("heuristic",)  # the players --watch names
 
 SessionFactory = Callable[[], Session]
@@ -265,8 +263,6 @@ def check_args(command: argparse.ArgumentParser, args: argparse.Namespace) -> No
     env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
     if args.protocol and env_id not in PROTOCOL_ENV_IDS:
         command.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
-    if args.record is not None and env_id not in RECORDED_ENV_IDS:
-        command.error(f"--record: recordings are of {', '.join(RECORDED_ENV_IDS)}, not {env_id}")
 
 
 def env_options(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:

@@ -335,7 +335,6 @@ def test_it_binds_to_this_machine_unless_told():
     "argv",
     [
         ["--replay", "x.json", "--env", "Pinball-v1"],
-        ["--record", "x.json", "--env", "Pinball-v3"],
         ["--max-viewers", "0"],
         ["--games", "0"],
         ["--protocol", "--table", "classic"],
