@@ -310,7 +310,10 @@ def _delete(key: str) -> Callable[[dict[str, Any]], None]:
         (_set("games", 0, "frames", -1), r"games\[0\]\.frames must be >= 0"),
         (_set("games", []), r"holds no game"),
         (_set("options", "render_mode", "human"), r"options\.render_mode is set by the play"),
-        (_set("env_id", "CartPole-v1"), r"only 'Pinball-v0', 'Pinball-v1', 'Pinball-v2' or 'Pinball-v3' games"),
+        (
+            _set("env_id", "CartPole-v1"),
+            r"only 'Pinball-v0', 'Pinball-v1', 'Pinball-v2' or 'Pinball-v3' games",
+        ),
         (_set("table_sha256", "abc"), r"table_sha256 must be 64"),
     ],
 )
