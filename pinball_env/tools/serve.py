@@ -15,8 +15,10 @@ Modes (each page its own session, stepped on the server at real speed):
   buttons; with ``--record`` every page's ended games are written to FILE in the play tool's
   format (``pinball_env.recording``), which ``python -m agents.evaluate --recording FILE``
   scores on the protocol;
-- watch: ``--watch heuristic [--games N]`` (the scripted player, N games side by side);
-  ``python -m agents.serve --model RUN_OR_ZIP`` watches a trained agent the same way;
+- watch: ``--watch heuristic [--games N]`` (the scripted player, N games side by side), or
+  ``--model RUN_OR_ZIP`` (or ``pretrained:NAME``) a trained agent, on the env it was trained on:
+  loaded once, from that path only, by the installed agent loader (:func:`agent_loader`: the
+  repository's ``agents``, which are not in the wheel, so from a checkout);
 - replay: ``--replay FILE``: a recording, checked first (another version's, or one that does not
   replay as recorded, is refused), on a timeline: play, pause, step, scrub, speed.
 
@@ -30,6 +32,7 @@ import argparse
 import asyncio
 import contextlib
 import html
+import importlib.metadata
 import json
 import sys
 from collections import deque
@@ -71,6 +74,10 @@ MAX_QUEUED = 32  # messages other than frames waiting for a slow page (the oldes
 MAX_LATE_FRAMES = 6  # a tick this late skips ahead rather than stepping to catch up
 STATIC = Path(__file__).resolve().parent / "web" / "static"
 WATCHERS = ("heuristic",)  # the players --watch names
+# The entry point group of --model's loader: a function of the path given that returns a maker
+# of the agent's games (a WatchedPlayer each) and the env id they are of. The package never
+# imports the agents; the repository's agents/ registers theirs (pyproject.toml).
+AGENT_LOADERS = "pinball_env.agent_loaders"
 
 SessionFactory = Callable[[], Session]
 
@@ -224,7 +231,7 @@ async def play_session(websocket: Any, session: Session, disconnect: type[Except
 
 
 def parser() -> argparse.ArgumentParser:
-    """The command line's arguments (``agents.serve`` adds ``--model``)."""
+    """The command line's arguments."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--host", default=HOST, help=f"address to listen on (default {HOST})")
     parser.add_argument("--port", type=int, default=PORT, help=f"port (default {PORT})")
@@ -243,6 +250,9 @@ def parser() -> argparse.ArgumentParser:
     modes.add_argument("--record", type=Path, help="play: write the games played to this file")
     modes.add_argument("--replay", type=Path, help="replay a recording on a timeline")
     modes.add_argument("--watch", choices=WATCHERS, help="watch a scripted player play")
+    modes.add_argument(
+        "--model", help="watch a trained agent: a run folder, a model zip or pretrained:NAME"
+    )
     return parser
 
 
@@ -260,6 +270,8 @@ def check_args(command: argparse.ArgumentParser, args: argparse.Namespace) -> No
         args.env or args.table or args.seed is not None or args.protocol
     ):
         command.error("--replay takes the env, the table and the seeds from the recording")
+    if args.model is not None and (args.env or args.table or args.protocol):
+        command.error("--model plays the agent's own game: no --env, --table or --protocol")
     env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
     if args.protocol and env_id not in PROTOCOL_ENV_IDS:
         command.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
@@ -283,9 +295,16 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
         except RecordingError as refused:
             raise SystemExit(f"refused: {refused}") from None
         return (lambda: ReplaySession(index)), f"Pinball replay: {args.replay.name}"
+    seed = args.seed or 0
+    if args.model is not None:
+        player, env_id = agent_loader()(args.model)
+
+        def agent() -> Session:
+            return WatchSession([player() for _ in range(args.games)], seed, args.model)
+
+        return agent, f"Pinball: {args.model} on {env_id}"
     env_id, options = env_options(args)
     if args.watch is not None:
-        seed = args.seed or 0
 
         def heuristic() -> WatchedPlayer:
             env = gym.make(env_id, **options)
@@ -302,6 +321,25 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
         recorder = Recorder(args.record, probe, env_id, options)
         probe.close()
     return (lambda: PlaySession(env_id, options, args.seed, recorder)), f"Pinball: {env_id}"
+
+
+def agent_loader() -> Callable[[str], tuple[Callable[[], WatchedPlayer], str]]:
+    """The installed loader of ``--model`` (the entry point of :data:`AGENT_LOADERS`); SystemExit
+    saying what to do where there is none or it cannot be imported (a wheel without the
+    repository's agents)."""
+    found = sorted(importlib.metadata.entry_points(group=AGENT_LOADERS), key=lambda e: e.name)
+    if not found:
+        raise SystemExit(
+            f"--model needs an agent loader (entry point group {AGENT_LOADERS}): the "
+            "repository's agents provide one; install its checkout (pip install -e .)"
+        )
+    try:
+        return found[0].load()
+    except ImportError as error:
+        raise SystemExit(
+            f"--model: the agent loader {found[0].value} cannot be imported ({error}); run from "
+            "the repository's checkout, where agents/ is"
+        ) from None
 
 
 def allowed_hosts(host: str) -> tuple[str, ...] | None:

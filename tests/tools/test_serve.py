@@ -347,17 +347,28 @@ def test_the_command_line_refuses_what_makes_no_sense(argv):
         serve.check_args(command, command.parse_args(argv))
 
 
-def test_the_agent_is_loaded_only_from_the_command_line(capsys):
-    """agents.serve takes --model, the one path it loads; the page has no way to name one."""
-    agents_serve = pytest.importorskip("agents.serve")
+def test_the_agent_is_loaded_only_from_the_command_line(monkeypatch, capsys):
+    """--model is the one path the tool loads an agent from (the page has no way to name one),
+    through the installed loader: the repository's agents."""
+    pytest.importorskip("agents.serve")
+    command = serve.parser()
+    args = command.parse_args(["--model", "pretrained:ppo-v0", "--env", "Pinball-v1"])
     with pytest.raises(SystemExit):
-        agents_serve.main([])
-    assert "required: --model" in capsys.readouterr().err
-    with pytest.raises(SystemExit):
-        agents_serve.main(["--model", "pretrained:ppo-v0", "--replay", "x.json"])
-    assert "--model plays the agent's own game: no --replay" in capsys.readouterr().err
-    with pytest.raises(SystemExit, match="cannot load the agent"):
-        agents_serve.main(["--model", "no/such/run"])
+        serve.check_args(command, args)
+    assert "--model plays the agent's own game" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # one mode at a time
+        command.parse_args(["--model", "pretrained:ppo-v0", "--replay", "x.json"])
+    assert serve.agent_loader().__module__ == "agents.serve"
+    with pytest.raises(SystemExit, match="cannot load the agent no/such/run"):
+        serve.session_factory(command.parse_args(["--model", "no/such/run"]))
+    factory, title = serve.session_factory(command.parse_args(["--model", "pretrained:ppo-v0"]))
+    assert title == "Pinball: pretrained:ppo-v0 on Pinball-v0"
+    hello = factory().hello()[0]
+    assert hello["mode"] == "watch" and hello["env_id"] == "Pinball-v0"
+    # Without the agents (a wheel): a clear error, not a traceback.
+    monkeypatch.setattr(serve.importlib.metadata, "entry_points", lambda group: [])
+    with pytest.raises(SystemExit, match="--model needs an agent loader"):
+        serve.agent_loader()
 
 
 def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
