@@ -34,11 +34,12 @@ import contextlib
 import html
 import importlib.metadata
 import json
+import os
 import sys
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit
 
 import gymnasium as gym
@@ -65,6 +66,10 @@ from pinball_env.tools.web.sessions import (
     WatchSession,
     error,
 )
+
+if TYPE_CHECKING:  # the web extra is optional: imported where used (make_app)
+    from starlette.applications import Starlette
+    from starlette.websockets import WebSocket
 
 HOST = "127.0.0.1"  # this machine only; --host 0.0.0.0 opens it to the network
 LOCAL_NAMES = ("localhost", "127.0.0.1")  # what a page on this machine calls it (the Host)
@@ -107,6 +112,7 @@ class Outbox:
         if self.others:
             return self.others.popleft()
         frame, self.frame = self.frame, None
+        assert frame is not None  # the wait above ends on a message
         return frame
 
 
@@ -120,7 +126,7 @@ def make_app(
     max_viewers: int = MAX_VIEWERS,
     title: str = "Pinball",
     hosts: tuple[str, ...] | None = LOCAL_NAMES,
-) -> Any:
+) -> "Starlette":
     """The ASGI app: the page (``/``), its files (``/static``) and each page's WebSocket
     (``/ws``), whose session ``factory()`` makes. ``hosts``: the names a request may call the
     server by (the Host header; None: any), so that another site's name pointed at this
@@ -178,16 +184,23 @@ def make_app(
     return app
 
 
-async def play_session(websocket: Any, session: Session, disconnect: type[Exception]) -> None:
+async def play_session(
+    websocket: "WebSocket", session: Session, disconnect: type[Exception]
+) -> None:
     """Run ``session`` for one page: its hello, then a tick every frame at real speed, the
-    page's messages applied as they come, each sent through an :class:`Outbox`."""
+    page's messages applied as they come, each sent through an :class:`Outbox`. The page gone
+    (``disconnect``) ends it quietly; any other failure (a session's bug) is raised."""
     outbox = Outbox()
     for message in session.hello():
         outbox.put(message)
 
     async def send() -> None:
         while True:
-            await websocket.send_text(encode(await outbox.get()))
+            text = encode(await outbox.get())
+            try:
+                await websocket.send_text(text)
+            except RuntimeError as gone:  # Starlette's send to a page that has gone
+                raise disconnect(1006) from gone
 
     async def receive() -> None:
         while True:
@@ -216,8 +229,7 @@ async def play_session(websocket: Any, session: Session, disconnect: type[Except
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         for task in done:  # a page gone ends the session; anything else is a bug to show
             failure = task.exception()
-            # (Starlette's send to a page that has gone raises RuntimeError.)
-            if failure is not None and not isinstance(failure, (disconnect, RuntimeError)):
+            if failure is not None and not isinstance(failure, disconnect):
                 raise failure
     finally:
         for task in tasks:
@@ -241,11 +253,13 @@ def parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     parser.add_argument("--env", choices=ENV_IDS, help="the env (default Pinball-v0)")
     parser.add_argument("--table", help="table name or YAML path (default: the env's own)")
-    parser.add_argument("--seed", type=int, help="seed of the first game (default: random)")
+    parser.add_argument(
+        "--seed", type=int, help="seed of the first game (default: random in play, 0 in watch)"
+    )
     parser.add_argument(
         "--protocol", action="store_true", help="the benchmark protocol's game (sticky actions)"
     )
-    parser.add_argument("--games", type=int, default=1, help="watch: games side by side")
+    parser.add_argument("--games", type=int, help="watch: games side by side (default 1)")
     modes = parser.add_mutually_exclusive_group()
     modes.add_argument("--record", type=Path, help="play: write the games played to this file")
     modes.add_argument("--replay", type=Path, help="replay a recording on a timeline")
@@ -262,8 +276,10 @@ def check_args(command: argparse.ArgumentParser, args: argparse.Namespace) -> No
         command.error(f"--seed must be >= 0, got {args.seed}")
     if not 1 <= args.max_viewers <= 1000:
         command.error(f"--max-viewers must be from 1 to 1000, got {args.max_viewers}")
-    if not 1 <= args.games <= 16:
+    if args.games is not None and not 1 <= args.games <= 16:
         command.error(f"--games must be from 1 to 16, got {args.games}")
+    if args.games is not None and args.watch is None and args.model is None:
+        command.error("--games is for watching (--watch, --model): a page plays one game")
     if args.protocol and args.table:
         command.error("--protocol plays the env's own table")
     if args.replay is not None and (
@@ -272,14 +288,37 @@ def check_args(command: argparse.ArgumentParser, args: argparse.Namespace) -> No
         command.error("--replay takes the env, the table and the seeds from the recording")
     if args.model is not None and (args.env or args.table or args.protocol):
         command.error("--model plays the agent's own game: no --env, --table or --protocol")
-    env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
+    env_id = default_env_id(args)
     if args.protocol and env_id not in PROTOCOL_ENV_IDS:
         command.error(f"--protocol plays {', '.join(PROTOCOL_ENV_IDS)}, not {env_id}")
+    if args.record is not None:
+        problem = unwritable(args.record)
+        if problem:
+            command.error(f"--record {args.record}: {problem}")
+
+
+def unwritable(path: Path) -> str | None:
+    """Why the recording cannot be written to ``path`` (None: it can), checked at the start so
+    that a game is not lost at its end: the file is written through a temporary file beside it
+    (:func:`~pinball_env.recording.write_recording`), so its folder must take new files."""
+    folder = path.parent
+    if path.is_dir():
+        return "is a folder"
+    if not folder.is_dir():
+        return f"no folder {folder} (create it first)"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"the folder {folder} is not writable"
+    return None
+
+
+def default_env_id(args: argparse.Namespace) -> str:
+    """The env of the command line's game: ``--env``, else the protocol's or the first."""
+    return args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
 
 
 def env_options(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """The env id and ``gym.make`` options of the command line's game."""
-    env_id = args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
+    env_id = default_env_id(args)
     options: dict[str, Any] = {"table": args.table or default_table(env_id)}
     if args.protocol:
         options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
@@ -296,11 +335,12 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
             raise SystemExit(f"refused: {refused}") from None
         return (lambda: ReplaySession(index)), f"Pinball replay: {args.replay.name}"
     seed = args.seed or 0
+    games = args.games or 1
     if args.model is not None:
         player, env_id = agent_loader()(args.model)
 
         def agent() -> Session:
-            return WatchSession([player() for _ in range(args.games)], seed, args.model)
+            return WatchSession([player() for _ in range(games)], seed, args.model)
 
         return agent, f"Pinball: {args.model} on {env_id}"
     env_id, options = env_options(args)
@@ -312,7 +352,7 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
             return WatchedPlayer(env, lambda obs, info: policy(info), policy.reset)
 
         def watch() -> Session:
-            return WatchSession([heuristic() for _ in range(args.games)], seed, args.watch)
+            return WatchSession([heuristic() for _ in range(games)], seed, args.watch)
 
         return watch, f"Pinball: {args.watch} on {env_id}"
     recorder = None
@@ -357,7 +397,7 @@ def require_web() -> None:
         raise SystemExit(str(error)) from None
 
 
-def run(app: Any, host: str, port: int) -> None:
+def run(app: "Starlette", host: str, port: int) -> None:
     """Serve ``app`` until interrupted (uvicorn)."""
     uvicorn = require("uvicorn")
     print(f"serving on http://{host}:{port}/ (Ctrl+C stops)", file=sys.stderr)

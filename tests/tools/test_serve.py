@@ -7,6 +7,7 @@ import asyncio
 import dataclasses
 import functools
 import json
+import os
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -156,6 +157,8 @@ MALFORMED = [
     '{"type": "seek", "frame": 3}',  # a replay's, not a player's
     '{"type": "model", "path": "/etc/passwd"}',  # no message loads anything
     "x" * 10_000,
+    "[" * 2040 + "]" * 2040,  # under the size cap, deeper than json's recursion limit
+    '{"type": "buttons", "held": ' + "[" * 2000 + "]" * 2000 + "}",
     b"\xff\xfe",
 ]
 
@@ -192,10 +195,30 @@ def test_a_replay_refuses_malformed_controls(recording_path, text):
     session.close()
 
 
-def test_no_message_names_a_file():
-    """The page cannot load a model or a file: no message of any mode carries a path."""
-    fields = {key for fields in MESSAGES.values() for key in fields}
-    assert fields == {"held", "command", "frames", "frame", "speed", "game"}
+VALID = {"held": [], "command": "pause", "frames": 1, "frame": 0, "speed": 1, "game": 0}
+
+
+@pytest.mark.parametrize("key", ["path", "file", "model"])
+def test_no_message_names_a_file(recording_path, monkeypatch, key):
+    """The page cannot load a model or a file: every message of every mode naming one is
+    refused as having an unknown key, and nothing is opened."""
+    sessions = [
+        PlaySession("Pinball-v1", seed=3),
+        WatchSession([WatchedPlayer(gym.make("Pinball-v1"), lambda obs, info: 0)]),
+        ReplaySession(ReplayIndex(load_recording(recording_path))),
+    ]
+    opened = []
+    monkeypatch.setattr("builtins.open", lambda *args, **kwargs: opened.append(args))
+    for session in sessions:
+        for kind in session.accepted:
+            message = {"type": kind, **{f: VALID[f] for f in MESSAGES[kind]}}
+            assert all(r["type"] != "error" for r in session.receive(json.dumps(message)))
+            (reply,) = session.receive(json.dumps({**message, key: "/etc/passwd"}))
+            assert reply["message"] == f"{kind} message: unknown key {key!r}"
+    assert opened == []
+    monkeypatch.undo()
+    for session in sessions:
+        session.close()
 
 
 # --- recordings and the replay -----------------------------------------------------------------
@@ -249,7 +272,10 @@ def test_the_replay_is_the_recorded_game_bitwise(recording_path):
         serve.encode(session.tick()[0])  # every message is JSON
     assert session.frame == 301 and state_equal(session.core.game.snapshot(), reference)
     session.receive('{"type": "step", "frames": -1}')
+    session.tick()
+    assert session.frame == 300
     session.receive('{"type": "step", "frames": 1}')
+    session.tick()
     assert state_equal(session.core.game.snapshot(), reference)
     # Played at 16x to the end: the recorded score, frames and end.
     session.receive('{"type": "speed", "speed": 16}')
@@ -264,6 +290,49 @@ def test_the_replay_is_the_recorded_game_bitwise(recording_path):
     assert frame(session.tick())["score"] == recording.games[1].score
     session.close()
     straight.close()
+
+
+def test_a_seek_to_the_end_of_a_game_of_whole_snapshot_periods(recording_path):
+    """A game whose length is a multiple of the snapshot period (as every time-limit game:
+    7200 = 24 x 300) has no snapshot at its end: a seek there steps from the last one."""
+    recording = load_recording(recording_path)
+    length = recording.games[0].frames
+    assert length == len(ReplayIndex(recording).actions[0])
+    divisor = next(d for d in range(2, length) if length % d == 0)
+    index = ReplayIndex(recording, every=length // divisor)
+    assert len(index.snapshots[0]) == divisor  # none at the end
+    straight = ReplaySession(index)
+    for action in index.actions[0]:
+        straight.env.step(action)
+    session = ReplaySession(index)
+    session.receive(json.dumps({"type": "seek", "frame": length}))
+    assert frame(session.tick())["score"] == recording.games[0].score
+    assert session.frame == length
+    assert state_equal(session.core.game.snapshot(), straight.core.game.snapshot())
+    session.close()
+    straight.close()
+
+
+def test_many_seeks_in_a_row_do_one_seeks_work(recording_path, monkeypatch):
+    """A page flooding seeks and steps costs the server one seek a tick, the latest wanted."""
+    index = ReplayIndex(load_recording(recording_path), every=100)
+    session = ReplaySession(index)
+    steps, restores = [], []
+    step, restore = session.env.step, session.core.game.restore
+    monkeypatch.setattr(session.env, "step", lambda a: steps.append(a) or step(a))
+    monkeypatch.setattr(session.core.game, "restore", lambda s: restores.append(s) or restore(s))
+    for target in range(500, 0, -3):  # back and forth by more than a snapshot period
+        session.receive(json.dumps({"type": "seek", "frame": target}))
+        session.receive(json.dumps({"type": "step", "frames": 150}))
+    assert steps == restores == []  # nothing done until the tick
+    session.tick()
+    assert session.frame == 2 + 150 and (len(steps), len(restores)) == (52, 1)
+    reference = ReplaySession(index)
+    for action in index.actions[0][:152]:
+        reference.env.step(action)
+    assert state_equal(session.core.game.snapshot(), reference.core.game.snapshot())
+    session.close()
+    reference.close()
 
 
 def test_a_recording_of_another_version_or_game_is_refused(recording_path, tmp_path):
@@ -299,9 +368,14 @@ def test_watching_a_step_of_several_frames_shows_each_of_them(options):
     policy = HeuristicPolicy(env.unwrapped.table)
     session = WatchSession([WatchedPlayer(env, lambda obs, info: policy(info))], seed=1)
     session.hello()
-    frames = [session.tick()[0]["games"][0] for _ in range(600)]
+    frames, ends = [], 0
+    for _ in range(600):
+        frames.append(session.tick()[0]["games"][0])
+        if not session.games[0].frames:  # a step's last frame shown: its points counted
+            assert frames[-1]["score"] == env.unwrapped.game.score[0]
+            ends += 1
     assert [state["frame"] for state in frames] == list(range(1, 601))
-    assert frames[-1]["score"] <= env.unwrapped.game.score[0]
+    assert ends >= 600 // 30, ends  # (steps of several frames, each one's end checked)
     session.close()
 
 
@@ -339,12 +413,66 @@ def test_it_binds_to_this_machine_unless_told():
         ["--games", "0"],
         ["--protocol", "--table", "classic"],
         ["--record", "x.json", "--replay", "y.json"],
+        ["--games", "2"],  # play: one game a page
+        ["--replay", "x.json", "--games", "2"],
+        ["--record", "no/such/folder/x.json"],  # checked at the start, not when a game ends
+        ["--record", "."],
     ],
 )
 def test_the_command_line_refuses_what_makes_no_sense(argv):
     command = serve.parser()
     with pytest.raises(SystemExit):
         serve.check_args(command, command.parse_args(argv))
+
+
+def test_an_unwritable_recording_is_refused_at_the_start(tmp_path, capsys):
+    command = serve.parser()
+    serve.check_args(command, command.parse_args(["--record", str(tmp_path / "me.json")]))
+    path = tmp_path / "gone" / "me.json"
+    with pytest.raises(SystemExit):
+        serve.check_args(command, command.parse_args(["--record", str(path)]))
+    assert f"--record {path}: no folder" in capsys.readouterr().err
+    if os.geteuid() != 0:  # (root writes anywhere)
+        folder = tmp_path / "locked"
+        folder.mkdir(mode=0o500)
+        with pytest.raises(SystemExit):
+            serve.check_args(command, command.parse_args(["--record", str(folder / "me.json")]))
+        assert "is not writable" in capsys.readouterr().err
+
+
+class _Page:
+    """A WebSocket whose page sends nothing; ``gone``: its sends fail as Starlette's do."""
+
+    def __init__(self, gone: bool = False) -> None:
+        self.gone = gone
+        self.sent: list[str] = []
+
+    async def send_text(self, text: str) -> None:
+        if self.gone:
+            raise RuntimeError('Cannot call "send" once a close message has been sent.')
+        self.sent.append(text)
+
+    async def receive(self) -> dict:
+        await asyncio.Event().wait()  # never
+        return {}
+
+
+class _Broken(PlaySession):
+    def tick(self) -> list[dict]:
+        raise RuntimeError("a bug in the session")
+
+
+def test_a_page_gone_ends_its_session_quietly_and_a_sessions_bug_is_raised():
+    class Gone(Exception):
+        pass
+
+    session = PlaySession("Pinball-v1", seed=1)
+    asyncio.run(serve.play_session(_Page(gone=True), session, Gone))  # returns: the page went
+    broken = _Broken("Pinball-v1", seed=1)
+    with pytest.raises(RuntimeError, match="a bug in the session"):
+        asyncio.run(serve.play_session(_Page(), broken, Gone))
+    session.close()
+    broken.close()
 
 
 def test_the_agent_is_loaded_only_from_the_command_line(monkeypatch, capsys):
@@ -411,7 +539,10 @@ def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
         page = urllib.request.urlopen(url + "/").read().decode()
         assert '<script src="/static/app.js">' in page
         assert urllib.request.urlopen(url + "/static/app.js").status == 200
-        for path in ("/static/../serve.py", "/etc/passwd", "/static/", "/ws"):
+        # A file one level above the static folder (it exists) is not served, however named.
+        assert (serve.STATIC.parent / "sessions.py").is_file()
+        traversals = ("/static/../sessions.py", "/static/%2e%2e/sessions.py")
+        for path in (*traversals, "/etc/passwd", "/static/", "/ws"):
             with pytest.raises(urllib.error.HTTPError):
                 urllib.request.urlopen(url + path)
         # Called by another name (a site's name pointed at 127.0.0.1): refused.

@@ -17,6 +17,9 @@ Messages from the page::
     {"type": "play"} / {"type": "pause"}                 # replay
     {"type": "step", "frames": 1}                        # replay: this many frames on (or back)
     {"type": "seek", "frame": 1200}                      # replay: to this frame
+
+A replay's seeks and steps are done at the next tick, the latest only (a page sending many
+costs one seek's work a tick, at most :data:`SNAPSHOT_EVERY` steps).
     {"type": "speed", "speed": 4}                        # replay: frames per tick, 1/16 to 16
     {"type": "game", "game": 1}                          # replay: the recording's game (from 0)
 """
@@ -81,6 +84,8 @@ def parse_message(text: str | bytes, accepted: Sequence[str]) -> Message:
         message = json.loads(text)
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise MessageError(f"not JSON: {error}") from None
+    except RecursionError:  # "[[[[...": deeper than the parser's stack, still under the size cap
+        raise MessageError("JSON nested too deeply") from None
     if not isinstance(message, dict):
         raise MessageError(f"expected a JSON object, got {type(message).__name__}")
     kind = message.get("type")
@@ -109,7 +114,7 @@ class Session:
     frame; :meth:`receive` takes the page's messages (replies: errors)."""
 
     accepted: tuple[str, ...] = ()
-    fps: float = 60.0  # ticks per second: the game's frame rate
+    fps: float  # ticks per second at real speed (from the table's frame rate, _frame_rate)
 
     def hello(self) -> list[Message]:
         """The first messages: ``hello`` (the mode, the env, the geometry, the keys), then
@@ -131,6 +136,13 @@ class Session:
 
     def close(self) -> None:
         """End the session (a page closed)."""
+
+
+def _frame_rate(core: PinballEnv, every_frame: bool = False) -> float:
+    """Ticks per second at real speed: the table's frame rate, over the env's frame skip where a
+    tick is one step (play, replay) rather than one frame (watch, ``every_frame``)."""
+    rate = core.game.table.simulation.frame_rate
+    return rate if every_frame else rate / core.options.frame_skip
 
 
 def _table_geometry(env: PinballEnv) -> dict[str, Any]:
@@ -189,7 +201,7 @@ class PlaySession(Session):
         self.env_id = env_id
         self.env = make_recorded_env(options, env_id=env_id)
         self.core: PinballEnv = self.env.unwrapped
-        self.fps = self.core.steps_per_second
+        self.fps = _frame_rate(self.core)
         self.names = self.core.game.button_names
         self.nudges = self.core.options.nudge_actions
         self.recorder = recorder
@@ -345,7 +357,7 @@ class WatchSession(Session):
             raise ValueError("a watch session needs at least one player")
         self.games = [_Watched(player) for player in players]
         self.name = name
-        self.fps = self.games[0].core.game.table.simulation.frame_rate
+        self.fps = _frame_rate(self.games[0].core, every_frame=True)
         self.paused = False
         self.next_seed = seed
         for game in self.games:
@@ -436,14 +448,6 @@ class ReplayIndex:
             self.scores[game].append(int(score))
 
 
-def _time_limit(env: gym.Env) -> gym.wrappers.TimeLimit | None:
-    while isinstance(env, gym.Wrapper):
-        if isinstance(env, gym.wrappers.TimeLimit):
-            return env
-        env = env.env
-    return None
-
-
 class ReplaySession(Session):
     """A recording's games on a timeline (``index``: the recording, checked): play, pause, step
     a frame (or back), seek, speed, the game. Every frame is the recorded game's, bitwise: the
@@ -458,8 +462,7 @@ class ReplaySession(Session):
             recording.options, recording.max_episode_steps, recording.env_id
         )
         self.core: PinballEnv = self.env.unwrapped
-        self.fps = self.core.steps_per_second
-        self.limit = _time_limit(self.env)
+        self.fps = _frame_rate(self.core)
         self.playing = False
         self.speed = 1.0
         self._credit = 0.0  # frames owed by a speed below 1
@@ -473,17 +476,20 @@ class ReplaySession(Session):
         self.actions = self.index.actions[game]
         self.env.reset(seed=games[game].seed)
         self.frame = 0
+        self.wanted: int | None = None  # the frame a seek or step asked for, done at the tick
 
     def _goto(self, frame: int) -> None:
         """Step to ``frame`` (clipped to the game): on from here, or from the last snapshot
         before it."""
         frame = min(max(frame, 0), len(self.actions))
         if frame < self.frame or frame - self.frame > self.index.every:
-            snapshot = self.index.snapshots[self.game][frame // self.index.every]
+            snapshots = self.index.snapshots[self.game]
+            # The game's end has no snapshot of its own (a game of 24 x 300 frames has 24).
+            snapshot = snapshots[min(frame // self.index.every, len(snapshots) - 1)]
             self.core.game.restore(snapshot.state)
             self.core.np_random.bit_generator.state = snapshot.rng
-            if self.limit is not None:
-                self.limit._elapsed_steps = snapshot.frame
+            # The TimeLimit wrapper's count is not set back (a private attribute): a replay
+            # never steps past the recorded game, so its truncation is never reached or read.
             self.frame = snapshot.frame
         while self.frame < frame:
             self.env.step(self.actions[self.frame])
@@ -508,7 +514,18 @@ class ReplaySession(Session):
             "scores": self.index.scores[self.game],
         }  # fmt: skip
 
+    @property
+    def _position(self) -> int:
+        """The frame the page has asked for: a seek or step not yet done, or the frame shown."""
+        return self.frame if self.wanted is None else self.wanted
+
+    def _want(self, frame: int) -> None:
+        self.wanted = min(max(frame, 0), len(self.actions))
+
     def tick(self) -> list[Message]:
+        if self.wanted is not None:  # the latest seek or step only: one seek's work a tick
+            self._goto(self.wanted)
+            self.wanted = None
         if self.playing:
             self._credit += self.speed
             frames = int(self._credit)
@@ -525,8 +542,8 @@ class ReplaySession(Session):
         kind = message["type"]
         if kind == "play" or (kind == "command" and message["command"] == "pause"):
             self.playing = not self.playing if kind == "command" else True
-            if self.frame >= len(self.actions) and self.playing:
-                self._goto(0)  # played to the end: from the start again
+            if self._position >= len(self.actions) and self.playing:
+                self._want(0)  # played to the end: from the start again
         elif kind == "command":
             raise MessageError(f"command {message['command']!r}: a replay's is pause")
         elif kind == "pause":
@@ -536,9 +553,9 @@ class ReplaySession(Session):
             if abs(frames) > MAX_STEP:
                 raise MessageError(f"step of {frames} frames: at most {MAX_STEP} either way")
             self.playing = False
-            self._goto(self.frame + frames)
+            self._want(self._position + frames)
         elif kind == "seek":
-            self._goto(message["frame"])
+            self._want(message["frame"])
         elif kind == "speed":
             speed = float(message["speed"])
             if not 1 / MAX_SPEED <= speed <= MAX_SPEED:
