@@ -299,13 +299,16 @@ def check_args(command: argparse.ArgumentParser, args: argparse.Namespace) -> No
 
 def unwritable(path: Path) -> str | None:
     """Why the recording cannot be written to ``path`` (None: it can), checked at the start so
-    that a game is not lost at its end: the file is written through a temporary file beside it
-    (:func:`~pinball_env.recording.write_recording`), so its folder must take new files."""
+    that a game is not lost at its end. Its folder is made, as the play tool's is (the file is
+    written through a temporary file beside it, :func:`~pinball_env.recording.write_recording`,
+    so the folder must take new files)."""
     folder = path.parent
     if path.is_dir():
         return "is a folder"
-    if not folder.is_dir():
-        return f"no folder {folder} (create it first)"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        return f"cannot make its folder {folder} ({error.strerror or error})"
     if not os.access(folder, os.W_OK | os.X_OK):
         return f"the folder {folder} is not writable"
     return None
