@@ -3,8 +3,8 @@
 Importing the package registers ``Pinball-v0`` (the classic table, or any other),
 ``Pinball-v1`` (the whole cabinet: the player's plunger, the nudge and the tilt, on
 ``classic_v1``), ``Pinball-v2`` (v1's game with a tilt that any sustained nudging trips, on
-``classic_v2``: the protocol's env), ``Pinball-v3`` (v2's game with multiball, on
-``classic_v3``: a trough of three balls, a lock and a saucer) and ``PinballProcgen-v0`` (a
+``classic_v2``), ``Pinball-v3`` (v2's game with multiball, on ``classic_v3``: a trough of three
+balls, a lock and a saucer; the protocol's env) and ``PinballProcgen-v0`` (a
 generated table each game, the table source ``"generated"``) with Gymnasium::
 
     import gymnasium as gym
@@ -38,9 +38,10 @@ ENVS = {
     "Pinball-v0": "the two-button table: the flippers, a launch from the machine's plunger",
     "Pinball-v1": "the whole cabinet (the player's plunger, the nudge and the tilt), rules and "
     "targets",
-    "Pinball-v2": "v1's game with a tilt that any sustained nudging trips: the benchmark's env",
+    "Pinball-v2": "v1's game with a tilt that any sustained nudging trips: the benchmark's "
+    "one-ball track",
     "Pinball-v3": "v2's game with multiball: a trough of three balls, a two-ball lock, a saucer, "
-    "the jackpot lit during a multiball",
+    "the jackpot lit during a multiball; the benchmark's env",
     "PinballProcgen-v0": "a generated table every game (`num_layouts`, `difficulty`, ...)",
 }
 TABLES = {"Pinball-v0": None, "Pinball-v1": "classic_v1", "Pinball-v2": "classic_v2",
