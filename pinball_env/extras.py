@@ -18,6 +18,9 @@ OPTIONAL: dict[str, tuple[str, str]] = {
     "moviepy": ("moviepy", "wrappers"),
     "cv2": ("opencv-python-headless", "wrappers"),
     "ray": ('"ray[rllib]"', "distributed"),
+    "starlette": ("starlette", "web"),
+    "uvicorn": ("uvicorn", "web"),
+    "websockets": ("websockets", "web"),
 }
 
 

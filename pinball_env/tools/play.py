@@ -40,7 +40,7 @@ import argparse
 import dataclasses
 import os
 import secrets
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -225,6 +225,17 @@ def keys_help(pygame: Any, cabinet: bool = False) -> str:
     return "keys: " + ", ".join(parts)
 
 
+def held_action(pressed: np.ndarray, button_names: Sequence[str], nudges: bool = True) -> int:
+    """The discrete action of the buttons held, ``pressed`` (a bool per ``button_names``, the
+    game's), as ``get_keys_to_action`` maps keys: with several nudges held the first of left,
+    right, up wins; without ``nudges`` (the env's ``nudge_actions`` off) none does. The play
+    tool's keys and the browser page's buttons both go through here."""
+    pressed = np.array(pressed, dtype=bool)
+    held = [i for i, name in enumerate(button_names) if name.startswith("nudge") and pressed[i]]
+    pressed[held[1:] if nudges else held] = False
+    return discrete_action(pressed)
+
+
 class PlayLoop:
     """A session of games on the keyboard in a pygame window (see the module doc).
 
@@ -268,7 +279,6 @@ class PlayLoop:
             if len(keys) == 1
         }
         self._no_buttons = np.zeros(len(game.button_names), dtype=bool)
-        self._nudges = [i for i, name in enumerate(game.button_names) if name.startswith("nudge")]
         self.record = None if record is None else Path(record)
         self.recording = Recording(
             env_id=env_id,
@@ -339,9 +349,7 @@ class PlayLoop:
         pressed = self._no_buttons.copy()
         for key in self.held:
             pressed |= self.key_buttons[key]
-        nudges = [i for i in self._nudges if pressed[i]]
-        pressed[nudges[1:]] = False
-        return discrete_action(pressed)
+        return held_action(pressed, self.env.unwrapped.game.button_names)
 
     def tick(self) -> None:
         """One frame: a step of the game unless paused or over, then the picture."""

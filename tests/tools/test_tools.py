@@ -48,7 +48,7 @@ def test_draw_shows_a_multiball(tmp_path):
 
 
 def test_the_tools_run_as_modules_of_pinball_env_tools():
-    for name in ("demo", "plot", "crosscheck", "play", "tilt"):
+    for name in ("demo", "plot", "crosscheck", "play", "tilt", "serve"):
         assert importlib.util.find_spec(f"pinball_env.tools.{name}") is not None, name
     # The speed benchmark is a developer's tool of the checkout, not a module of the package.
     assert importlib.util.find_spec("pinball_env.tools.benchmark") is None
