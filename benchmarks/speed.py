@@ -196,9 +196,14 @@ def measure_multiball(n_balls: int, n_envs: int, frames: int, seed: int) -> Figu
     speeds = table.trough.auto_plunger.speed
     rng = np.random.default_rng(seed)
     moving = np.ones(n_envs, dtype=np.bool_)
-    args = (world.geometry, world.settings, world.state, world.scratch, world.multi,
-            world.mscratch, world.pair, moving, 0, n_envs)  # fmt: skip
-    balls, active = world.multi.balls, world.multi.active
+    if getattr(world, "multi", None) is not None:  # a revision from before the ball slots
+        args = (world.geometry, world.settings, world.state, world.scratch, world.multi,
+                world.mscratch, world.pair, moving, 0, n_envs)  # fmt: skip
+        balls, active = world.multi.balls, world.multi.active
+    else:
+        args = (world.geometry, world.settings, world.state, world.scratch, world.pair, moving,
+                0, n_envs)  # fmt: skip
+        balls, active = world.balls, world.active
     reach = 3.0 * world.settings.radius
 
     def frame() -> float:

@@ -31,7 +31,7 @@ from pinball_env.physics.columns import (
     CABINET_Y,
     SPIN_ANGLE,
 )
-from pinball_env.physics.rays import RAY_RANGE, cast_all_rays, cast_all_rays_seeing
+from pinball_env.physics.rays import RAY_RANGE, cast_all_rays
 from pinball_env.render import Renderer, TargetsView
 from pinball_env.sim.tables import flipper_numbers
 from pinball_env.table import Table
@@ -77,7 +77,7 @@ class StateObserver:
     tables); else in metres and radians, within the bounds of ``game.table``. ``rays``: that
     many ray distances after the state, in ``RAY_RANGE`` (0-1), from the game's ball to the
     walls, posts and flippers; on a table of several balls also to the other balls (in play
-    or held) and the standing drop targets (``physics.rays.cast_all_rays_seeing``).
+    or held) and the standing drop targets (``physics.rays.cast_all_rays``).
     """
 
     def __init__(self, game: Game, normalised: bool = False, rays: int = 0) -> None:
@@ -87,6 +87,9 @@ class StateObserver:
         low, high = self.bounds()
         self.space = spaces.Box(low, high, dtype=np.float32)
         self._ray_distances = np.zeros((game.n_envs, rays), dtype=np.float32)
+        n = game.n_envs
+        self._sees_nothing = (np.zeros((n, 0, 5)), np.zeros((n, 0), dtype=bool), 0.0,
+                              np.zeros((n, 0), dtype=bool))  # fmt: skip
 
     def rows(self) -> tuple[ObservationRow, ...]:
         """One env's observation, entry by entry in order: what each is, its bounds and unit.
@@ -181,7 +184,7 @@ class StateObserver:
         state = world.state
         game = self.game.state
         obs = state_observation(
-            state.balls, state.flipper_angle, state.flipper_omega, self.game.in_play,
+            game.game_ball, state.flipper_angle, state.flipper_omega, self.game.in_play,
             game.balls_left, tables.flipper_rest, tables.flipper_up_sign,
         )  # fmt: skip
         if self.normalised:
@@ -206,16 +209,22 @@ class StateObserver:
         if self.game.table.rules is not None:
             obs = np.concatenate([obs, self.rule_observation()], axis=1)
         if self.rays:
-            args = (state.balls, tables.geometries(), state.flipper_angle, self.rays,
-                    state.hits.shape[1], self._ray_distances)  # fmt: skip
-            if self.game.multi is None:
-                world.threads.run(cast_all_rays, world.n_envs, *args)
-            else:  # several balls: the rays also see the other balls and the standing targets
-                seeing = (world.ball_states, world.ball_active, self.game.table.ball.radius,
-                          state.targets_up)  # fmt: skip
-                world.threads.run(cast_all_rays_seeing, world.n_envs, *args, *seeing)
+            world.threads.run(
+                cast_all_rays, world.n_envs, game.game_ball, tables.geometries(),
+                state.flipper_angle, self.rays, state.hits.shape[1], self._ray_distances,
+                *self._rays_see(),
+            )  # fmt: skip
             obs = np.concatenate([obs, self._ray_distances], axis=1)
         return obs
+
+    def _rays_see(self) -> tuple:
+        """What the rays see besides the walls, posts and flippers: on a table of several balls
+        every ball slot (in play or held) and the standing drop targets; on a table of one ball
+        nothing (no columns)."""
+        world = self.game.world
+        if self.game.multi is None:
+            return self._sees_nothing
+        return world.balls, world.active, self.game.table.ball.radius, world.state.targets_up
 
     def rule_counts(self) -> tuple[int, ...]:
         """How many rows each part of the rules' rows has: lights, drop targets, kickbacks,
@@ -281,7 +290,8 @@ class ImageObserver:
         state = world.state
         if not world.tables.varied:
             return self.renderers(world.table).frames(
-                state.balls, self.game.in_play, state.flipper_angle, grayscale=self.grayscale,
+                self.game.state.game_ball, self.game.in_play, state.flipper_angle,
+                grayscale=self.grayscale,
                 threads=world.threads, targets=targets_view(self.game, slice(None)),
                 **self._cabinet(slice(None)), **self._other_balls(),
             )  # fmt: skip
@@ -290,7 +300,7 @@ class ImageObserver:
             one = slice(env, env + 1)
             renderer = self.renderers(world.table_of(env))
             frames.append(renderer.frames(
-                state.balls[one], self.game.in_play[one], state.flipper_angle[one],
+                self.game.state.game_ball[one], self.game.in_play[one], state.flipper_angle[one],
                 grayscale=self.grayscale,
                 targets=targets_view(self.game, one, world.table_of(env)),
                 **self._cabinet(one),
@@ -303,7 +313,7 @@ class ImageObserver:
         if self.game.multi is None:
             return {}
         world = self.game.world
-        return {"other_balls": world.ball_states, "other_visible": world.ball_active}
+        return {"other_balls": world.balls, "other_visible": world.active}
 
     def _cabinet(self, envs: slice) -> dict[str, np.ndarray]:
         """The cabinet as the picture shows it (true scale): the plunger pulled back, a ball
@@ -352,9 +362,9 @@ def balls_observation(game: Game) -> np.ndarray:
     vx, vy (clipped to +-MAX_OBS_SPEED) and its flag: 1 in play (on the table, or waiting on
     the player's plunger), 0.5 held in a lock or saucer, 0 in the trough (x, y, vx, vy 0)."""
     world, state = game.world, game.state
-    balls = world.ball_states
+    balls = world.balls
     n, m = balls.shape[:2]
-    flag = np.where(world.ball_active, np.where(world.ball_held, 0.5, 1.0), 0.0)
+    flag = np.where(world.active, np.where(world.held, 0.5, 1.0), 0.0)
     slot = state.ball_slot
     waiting = np.flatnonzero(state.on_plunger & (slot >= 0))
     flag[waiting, slot[waiting]] = 1.0

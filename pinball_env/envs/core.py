@@ -159,15 +159,15 @@ class PinballCore:
         game, world = self.game, self.game.world
         table = world.table_of(env)
         renderer = self.frame_renderers(table)
-        ball, angles = tuple(world.state.balls[env, :2]), world.state.flipper_angle[env]
+        ball, angles = tuple(game.state.game_ball[env, :2]), world.state.flipper_angle[env]
         targets = targets_view(game, slice(env, env + 1), table)
         rules: dict[str, Any] = {}
         if table.rules is not None:
             rules = {"bonus": game.state.bonus[env], "multiplier": game.state.multiplier[env]}
         others: dict[str, Any] = {}
         if game.multi is not None:  # every ball on the table; the trough's count
-            on_table = world.ball_active[env]
-            others = {"other_balls": world.ball_states[env, on_table, :2]}
+            on_table = world.active[env]
+            others = {"other_balls": world.balls[env, on_table, :2]}
             rules["trough"] = int(game.multi.in_trough(env).sum())
         if not game.cabinet:
             playfield = renderer.frame(ball, angles, targets=targets, **others)

@@ -38,7 +38,7 @@ from pinball_env.game.playable import check_playable, check_same_game
 from pinball_env.game.rulebook import RuleBook, compile_rules
 from pinball_env.game.state import (
     GameState,
-    ball_slots,
+    ball_holders,
     clear_game,
     copy_state,
     copy_state_into,
@@ -74,7 +74,7 @@ class Game:
     around each frame's physics, which the compiled loop then hands back to Python: a ball
     that drains goes back to the trough, the ball is lost only when the last ball in play
     drains, locks hold balls out of play, the auto-plunger launches ``add_balls``. The loop
-    plays the game's ball (``world.state.balls``, ``world.state.active``): the first in play.
+    plays the game's ball (``state.game_ball``, ``state.game_ball_active``): the first in play.
 
     Attributes:
         world: the physics of every env (and, in ``world.tables``, every env's table).
@@ -114,10 +114,11 @@ class Game:
         self.event_names = rule_set.event_names
         # Several balls (a trough of more than one): game.multiball plays them around the
         # frames' physics, which the compiled loop hands back (World.swept_kernel is False).
-        self.multi = Multiball(self) if self.world.n_balls > 1 else None
-        slots = ball_slots(self.world) if self.multi is not None else None
+        several = self.world.n_balls > 1
         self.state = make_game_state(self.world.state, self.book, rule_set, len(table.flippers),
-                                     slots, len(table.locks))  # fmt: skip
+                                     ball_holders(self.world), several,
+                                     len(table.locks))  # fmt: skip
+        self.multi = Multiball(self.world, table, self.state) if several else None
         # The buttons: the flippers', and the cabinet's on a table that has one.
         self.cabinet = table.has_cabinet
         self.button_names = button_names(self.cabinet)
@@ -143,7 +144,7 @@ class Game:
         The other envs' games go on."""
         check_same_game(table, self.table)
         self.world.set_table(env, table)
-        self.state = self.state._replace(world=self.world.state)  # it may have grown
+        self._take_state(self.state)  # its arrays may have grown
         self._parameters = None  # heights and scores changed, and the arrays may have grown
 
     def __getstate__(self) -> dict[str, Any]:
@@ -152,6 +153,22 @@ class Game:
         state["_parameters"] = None  # a copy makes its own, over its own arrays
         state["on_frame"] = None  # a recorder's, not the game's
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._take_state(self.state)
+
+    def _take_state(self, state: GameState) -> None:
+        """Hold ``state`` with the World's arrays as its ``world`` (a pickle or a copy takes
+        them apart): on a table of one ball, the game's ball is the World's slot 0 again."""
+        world = self.world.state
+        self.state = state._replace(world=world)
+        if self.multi is None:
+            self.state = self.state._replace(
+                game_ball=world.balls[:, 0], game_ball_active=world.active[:, 0]
+            )
+        else:
+            self.multi.state = self.state
 
     @property
     def n_envs(self) -> int:
@@ -271,18 +288,18 @@ class Game:
             self.multi.sync(env)
         else:
             self.world.launch(env, 0.0)
-            self.world.state.active[env] = False
+            self.world.state.active[env, 0] = False
         self._moved(env)
 
     @property
     def in_play(self) -> np.ndarray:
         """(n_envs,) bool: a ball is in play (moving, or waiting on the player's plunger)."""
-        return self.world.state.active | self.state.on_plunger
+        return self.state.game_ball_active | self.state.on_plunger
 
     def _moved(self, envs: int | np.ndarray) -> None:
         """Restart the ball-search clock of env ``envs`` (or of each of them) where its ball is
         now."""
-        self.state.anchor[envs] = self.world.state.balls[envs][..., [BALL_X, BALL_Y]]
+        self.state.anchor[envs] = self.state.game_ball[envs][..., [BALL_X, BALL_Y]]
         self.state.still_frames[envs] = 0
 
     def buttons(self, actions: Any) -> np.ndarray:

@@ -25,7 +25,7 @@ def batch_infos(game: "Game") -> dict[str, np.ndarray]:
     ball drained this step) and ``frames`` (played in this game); the cabinet's, the rules' and
     the several balls' (:func:`_balls_infos`) entries on tables with them. With several balls
     ``ball_position`` and ``ball_velocity`` are the game's ball's, the first in play."""
-    state, balls = game.state, game.world.state.balls
+    state, balls = game.state, game.state.game_ball
     return {
         "ball_position": balls[:, [BALL_X, BALL_Y]],
         "ball_velocity": balls[:, [BALL_VX, BALL_VY]],
@@ -43,7 +43,7 @@ def batch_infos(game: "Game") -> dict[str, np.ndarray]:
 def env_info(game: "Game", env: int) -> dict[str, Any]:
     """The per-step info of env ``env``: that of :func:`batch_infos` as Python numbers (the
     ball's position and velocity as float64 arrays), plus ``events`` (:func:`element_events`)."""
-    state, ball = game.state, game.world.state.balls[env]
+    state, ball = game.state, game.state.game_ball[env]
     return {
         "ball_position": ball[[BALL_X, BALL_Y]],
         "ball_velocity": ball[[BALL_VX, BALL_VY]],
@@ -101,12 +101,12 @@ def _balls_infos(game: "Game", envs: int | slice) -> dict[str, Any]:
     if game.multi is None:
         return {}
     world, state = game.world, game.state
-    states = world.ball_states[envs]
+    states = world.balls[envs]
     locked = game.multi.locked(slice(None))
     return {
         "ball_positions": states[..., [BALL_X, BALL_Y]],
         "ball_velocities": states[..., [BALL_VX, BALL_VY]],
-        "balls_in_play": (world.ball_active & ~locked)[envs],
+        "balls_in_play": (world.active & ~locked)[envs],
         "balls_locked": locked[envs].sum(axis=-1),
         "multiball": state.multiball[envs].copy(),
         "multiballs": state.multiballs[envs].copy(),

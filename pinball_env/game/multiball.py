@@ -6,9 +6,9 @@ kernel, ``World.swept_kernel`` False), inside the same compiled step loop
 (``game.play.play_frames``), which hands each frame's physics back to ``Game._play_frames``;
 this module acts around that physics. Everything the loop does for
 one ball (the buttons, the cabinet, the rules, the ball save, the end-of-ball bonus, the ball
-search, the reward) it does here too, on **the game's ball**: ``state.world.balls`` (N, 5) and
-``state.world.active`` (N,), which the several-ball kernel does not use, hold the first ball
-in play (the lowest slot, ``GameState.ball_slot``) and whether any ball is in play. The loop's
+search, the reward) it does here too, on **the game's ball**: ``state.game_ball`` (N, 5) and
+``state.game_ball_active`` (N,) hold the first ball in play (the lowest slot,
+``GameState.ball_slot``) and whether any ball is in play. The loop's
 own writes to it (a ball put on the player's plunger, a tilted ball given up) are written back
 to its slot (:meth:`Multiball.write_back`) before Python does anything else.
 
@@ -66,17 +66,16 @@ moved a ball radius in BALL_SEARCH_TIME is stuck.
 """
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from pinball_env.game.parameters import ball_search_frames
+from pinball_env.game.state import GameState
 from pinball_env.physics.columns import BALL_X, BALL_Y
-from pinball_env.sim.world import compiled_entry
-
-if TYPE_CHECKING:
-    from pinball_env.game.game import Game
+from pinball_env.sim.world import World, compiled_entry
+from pinball_env.table import Table
 
 # The shooter lane is clear for the auto-plunger when no ball is within this many ball radii of
 # the plunger's position.
@@ -93,13 +92,13 @@ class Memory(NamedTuple):
 
 
 class Multiball:
-    """The several balls of ``game``'s envs (module docstring): what Python does around each
-    frame's physics."""
+    """The several balls of a game's envs (module docstring): what Python does around each
+    frame's physics, on ``world`` (its ball slots) and the game's ``state`` (``GameState``:
+    the game's ball, the trough's queue, the clocks), on ``table``."""
 
-    def __init__(self, game: "Game") -> None:
-        self.game = game
-        world = game.world
-        table = game.table
+    def __init__(self, world: World, table: Table, state: GameState) -> None:
+        self.world = world
+        self.state = state
         self.n_balls = world.n_balls
         self.lock_ids = np.asarray(world.lock_ids, dtype=np.int64)
         # The locks' element ids run on from one another (World.lock_ids).
@@ -114,7 +113,7 @@ class Multiball:
         self.radius2 = table.ball.radius * table.ball.radius
         n = world.n_envs
         # The game's ball as last written here: what the loop changes is written back.
-        self._proxy = np.zeros((n, world.state.balls.shape[1]))
+        self._proxy = np.zeros((n, world.state.balls.shape[2]))
         self._proxy_active = np.zeros(n, dtype=bool)
         self._was_active = np.zeros((n, self.n_balls), dtype=bool)
         # The slot whose ball search clock is the loop's (GameState.anchor, still_frames): the
@@ -131,20 +130,20 @@ class Multiball:
 
     def locked(self, env: int | slice) -> np.ndarray:
         """(M,) bool: env ``env``'s balls held in a lock (or (N, M), of ``slice(None)``)."""
-        world = self.game.world
+        world = self.world
         first, end = self._locks
         holder = world.holder[env]
-        return world.ball_held[env] & (holder >= first) & (holder < end)
+        return world.held[env] & (holder >= first) & (holder < end)
 
     def playing(self, env: int) -> np.ndarray:
         """(M,) bool: env ``env``'s balls in play (on the table, not held in a lock)."""
-        return self.game.world.ball_active[env] & ~self.locked(env)
+        return self.world.active[env] & ~self.locked(env)
 
     def in_trough(self, env: int) -> np.ndarray:
         """(M,) bool: env ``env``'s balls in the trough (neither in play nor held, nor waiting
         on the player's plunger)."""
-        world, state = self.game.world, self.game.state
-        free = ~world.ball_active[env] & ~world.ball_held[env]
+        world, state = self.world, self.state
+        free = ~world.active[env] & ~world.held[env]
         slot = state.ball_slot[env]
         if state.on_plunger[env] and slot >= 0:
             free[slot] = False
@@ -153,30 +152,30 @@ class Multiball:
     def launch_slot(self, env: int) -> int:
         """The slot a launch of env ``env`` fires: the game's ball where it is in play or waits
         on the plunger (a plunge, a ball search), else the trough's first."""
-        world, state = self.game.world, self.game.state
+        world, state = self.world, self.state
         slot = int(state.ball_slot[env])
-        if slot >= 0 and (state.on_plunger[env] or world.ball_active[env, slot]):
+        if slot >= 0 and (state.on_plunger[env] or world.active[env, slot]):
             return slot
         free = np.flatnonzero(self.in_trough(env))
         return int(free[0]) if len(free) else 0
 
     def new_game(self, env: int) -> None:
         """Every ball of env ``env`` back in the trough."""
-        world = self.game.world
-        world.ball_active[env] = False
+        world = self.world
+        world.active[env] = False
         for ball in range(self.n_balls):
             world._free(env, ball)
             world.released_from[env, ball] = -1
-        world.ball_states[env] = 0.0
-        self.game.state.ball_slot[env] = -1
+        world.balls[env] = 0.0
+        self.state.ball_slot[env] = -1
         self._watching[env] = -1
 
     def place(self, env: int, slot: int, velocity: tuple[float, float], active: bool) -> None:
         """Ball ``slot`` of env ``env`` at the plunger with ``velocity``; in play or (not
         ``active``) waiting there; it is the game's ball."""
-        world, state = self.game.world, self.game.state
+        world, state = self.world, self.state
         world.place_ball(env, tuple(self.plunger), velocity, ball=slot)
-        world.ball_active[env, slot] = active
+        world.active[env, slot] = active
         state.ball_slot[env] = slot
         # It has moved: its ball search starts again (the loop's clock is the game's ball's).
         state.ball_anchor[env, slot] = state.anchor[env] = self.plunger
@@ -188,32 +187,32 @@ class Multiball:
         """Carry the loop's writes to the game's ball into its slot: a ball put on the player's
         plunger (the next ball: a trough ball; a ball caught in the shooter lane: its own),
         a ball given up (a tilt), a ball moved."""
-        state, world = self.game.state, self.game.world
-        proxy, active = state.world.balls, state.world.active
+        state, world = self.state, self.world
+        proxy, active = state.game_ball, state.game_ball_active
         for env in written(proxy, active, self._memory()):
             slot = int(state.ball_slot[env])
             if state.on_plunger[env] and not active[env]:
-                own = slot >= 0 and world.ball_active[env, slot] and not world.ball_held[env, slot]
+                own = slot >= 0 and world.active[env, slot] and not world.held[env, slot]
                 if not own:
-                    free = np.flatnonzero(~world.ball_active[env] & ~world.ball_held[env])
+                    free = np.flatnonzero(~world.active[env] & ~world.held[env])
                     slot = int(free[0]) if len(free) else 0
                 world.place_ball(env, (proxy[env, BALL_X], proxy[env, BALL_Y]), ball=slot)
-                world.ball_active[env, slot] = False
+                world.active[env, slot] = False
                 state.ball_slot[env] = slot
                 self._watching[env] = -1
             elif self._proxy_active[env] and not active[env]:
-                if slot >= 0 and not world.ball_held[env, slot]:
-                    world.ball_active[env, slot] = False  # given up: back to the trough
+                if slot >= 0 and not world.held[env, slot]:
+                    world.active[env, slot] = False  # given up: back to the trough
                 self._watching[env] = -1
             elif slot >= 0:
-                world.ball_states[env, slot] = proxy[env]
+                world.balls[env, slot] = proxy[env]
             self._remember(env)
 
     def before_frame(self, envs: np.ndarray, rngs: Sequence[np.random.Generator]) -> None:
         """Before the physics of ``envs`` (indices): the locks the rules released let their
         balls go, and the auto-plunger launches a queued ball where the lane is clear. Only
         the envs with a lock released or a ball queued have anything to do (a few)."""
-        state, world = self.game.state, self.game.world
+        state, world = self.state, self.world
         busy = (state.pending_balls[envs] > 0) | state.lock_release[envs].any(axis=1)
         for env in envs[busy]:
             for lock in np.flatnonzero(state.lock_release[env]):
@@ -229,7 +228,7 @@ class Multiball:
                     world.place_ball(int(env), tuple(self.plunger), (0.0, speed),
                                      ball=int(trough[0]))  # fmt: skip
                     state.pending_balls[env] -= 1
-        self._was_active[envs] = world.ball_active[envs]
+        self._was_active[envs] = world.active[envs]
 
     def after_frame(self, envs: np.ndarray) -> None:
         """After the physics of the envs that ``envs`` (N,) bool marks: drains (back to the
@@ -237,10 +236,10 @@ class Multiball:
         that took the only ball in play (a ball served), the multiball's start and end, and the
         game's ball; every env in one compiled pass (:func:`after_frames`: nothing here draws
         from an env's random stream)."""
-        args = (self.game.state, self._memory(), np.ascontiguousarray(envs, dtype=np.bool_),
+        args = (self.state, self._memory(), np.ascontiguousarray(envs, dtype=np.bool_),
                 *self._constants)  # fmt: skip
         if self._after is None:
-            nothing = np.zeros(self.game.n_envs, dtype=np.bool_)
+            nothing = np.zeros(self.world.n_envs, dtype=np.bool_)
             self._after = compiled_entry(after_frames, (*args[:2], nothing, *args[3:]))
         self._after(*args)
 
@@ -252,13 +251,13 @@ class Multiball:
         (``GameState.ball_anchor``, ``ball_still``), the new one's taken from there
         (:func:`sync_ball`)."""
         first = -1 if drained is None or not drained.any() else int(np.flatnonzero(drained)[0])
-        sync_ball(self.game.state, self._memory(), env, first, *self._locks,
+        sync_ball(self.state, self._memory(), env, first, *self._locks,
                   *self._constants[-2:])  # fmt: skip
 
     def sync_envs(self, envs: np.ndarray) -> None:
         """:meth:`sync` of each of ``envs`` (indices; none drained), in one compiled call."""
         envs = np.ascontiguousarray(envs, dtype=np.int64)
-        sync_balls(self.game.state, self._memory(), envs, *self._locks,
+        sync_balls(self.state, self._memory(), envs, *self._locks,
                    *self._constants[-2:])  # fmt: skip
 
     def _memory(self) -> "Memory":
@@ -270,28 +269,28 @@ class Multiball:
         return state
 
     def _remember(self, env: int) -> None:
-        self._proxy[env] = self.game.state.world.balls[env]
-        self._proxy_active[env] = self.game.state.world.active[env]
+        self._proxy[env] = self.state.game_ball[env]
+        self._proxy_active[env] = self.state.game_ball_active[env]
 
     def remember_all(self) -> None:
         """Take the game's balls as they are (after a restore): the game's ball is watched by
         the loop where it is the ball in play that the loop's ball is."""
-        state, world = self.game.state, self.game.world
-        for env in range(self.game.n_envs):
+        state, world = self.state, self.world
+        for env in range(self.world.n_envs):
             self._remember(env)
             slot = int(state.ball_slot[env])
-            proxy = state.world.balls[env]
-            same = slot >= 0 and (proxy == world.ball_states[env, slot]).all()
-            watched = same and state.world.active[env] and self.playing(env)[slot]
+            proxy = state.game_ball[env]
+            same = slot >= 0 and (proxy == world.balls[env, slot]).all()
+            watched = same and state.game_ball_active[env] and self.playing(env)[slot]
             self._watching[env] = slot if watched else -1
 
     def _lane_clear(self, env: int) -> bool:
-        world, state = self.game.world, self.game.state
+        world, state = self.world, self.state
         if state.on_plunger[env]:
             return False
-        xy = world.ball_states[env][:, [BALL_X, BALL_Y]]
+        xy = world.balls[env][:, [BALL_X, BALL_Y]]
         near = np.hypot(*(xy - self.plunger).T) < self.lane_clear
-        return not (near & world.ball_active[env]).any()
+        return not (near & world.active[env]).any()
 
 
 @njit(cache=True, inline="always")
@@ -344,9 +343,9 @@ def sync_ball(state, memory, env, drained, first, end, plunger_x, lane_y):
     """:meth:`Multiball.sync` of env ``env`` (``drained``: the first slot that drained in the
     frame, -1: none; ``first``, ``end``: the locks' element ids; ``plunger_x``, ``lane_y``:
     where the game's ball waits for a queued one), compiled."""
-    slots, world = state.slots, state.world
-    active, held, holder, balls = slots.active, slots.held, slots.holder, slots.balls
-    proxy = world.balls
+    world = state.world
+    active, held, holder, balls = world.active, world.held, state.holders.holder, world.balls
+    proxy, proxy_active = state.game_ball, state.game_ball_active
     slot = state.ball_slot[env]
     watched = memory.watching[env]
     if (
@@ -365,11 +364,11 @@ def sync_ball(state, memory, env, drained, first, end, plunger_x, lane_y):
             break
     if state.on_plunger[env] and slot >= 0 and not active[env, slot]:
         _copy_row(proxy, balls, env, slot)
-        world.active[env] = False
+        proxy_active[env] = False
     elif playing >= 0:
         state.ball_slot[env] = playing
         _copy_row(proxy, balls, env, playing)
-        world.active[env] = True
+        proxy_active[env] = True
         state.anchor[env, 0] = state.ball_anchor[env, playing, 0]
         state.anchor[env, 1] = state.ball_anchor[env, playing, 1]
         state.still_frames[env] = state.ball_still[env, playing]
@@ -378,17 +377,17 @@ def sync_ball(state, memory, env, drained, first, end, plunger_x, lane_y):
         proxy[env, :] = 0.0
         proxy[env, BALL_X] = plunger_x
         proxy[env, BALL_Y] = lane_y
-        world.active[env] = True
+        proxy_active[env] = True
     else:
         if drained >= 0:
             slot = drained
             state.ball_slot[env] = slot
         if slot >= 0:
             _copy_row(proxy, balls, env, slot)
-        world.active[env] = False
+        proxy_active[env] = False
     for column in range(proxy.shape[1]):
         memory.proxy[env, column] = proxy[env, column]
-    memory.proxy_active[env] = world.active[env]
+    memory.proxy_active[env] = proxy_active[env]
 
 
 @njit(cache=True)
@@ -424,8 +423,8 @@ def after_frames(state, memory, stepped, lock_ids, first, end, r2, frames, plung
     physics; ``lock_ids`` the locks' element ids (``first`` to ``end``); ``r2``, ``frames``:
     the ball search's squared radius and wait; ``plunger_x``, ``lane_y``: see
     :func:`sync_ball`."""
-    slots, world = state.slots, state.world
-    active, held, holder = slots.active, slots.held, slots.holder
+    world = state.world
+    active, held, holder = world.active, world.held, state.holders.holder
     hits, pending, save = world.hits, state.pending_balls, state.multiball_save
     n_balls = active.shape[1]
     for env in range(len(stepped)):
@@ -451,7 +450,7 @@ def after_frames(state, memory, stepped, lock_ids, first, end, r2, frames, plung
         # The ball search of the balls but the game's (the loop's).
         game_ball = memory.watching[env]
         stuck, playing = search_balls(
-            env, slots.balls, active, held, holder, first, end, state.ball_anchor,
+            env, world.balls, active, held, holder, first, end, state.ball_anchor,
             state.ball_still, game_ball, r2, frames,
         )  # fmt: skip
         if stuck and not tilted:

@@ -127,7 +127,7 @@ def play_step(
     makes a frame of the plain env about 1.7x faster.
     """
     world = state.world
-    balls, active, hits = world.balls, world.active, world.hits
+    balls, active, hits = state.game_ball, state.game_ball_active, world.hits
     flipper_command = world.flipper_command
     score, balls_left, drain_height = state.score, state.balls_left, state.drain_height
     anchor, still_frames, game_frames = state.anchor, state.still_frames, state.frames

@@ -16,31 +16,30 @@ from pinball_env.physics import State
 from pinball_env.table.rules import RuleSet
 
 
-class BallSlots(NamedTuple):
-    """The World's several-ball arrays (``World.multi`` and its holders, see ``sim.world``),
-    held here so that a snapshot has them too; zero-size where the World has none."""
+class BallHolders(NamedTuple):
+    """What holds each ball slot (the World's saucers and locks, see ``sim.world``), held here
+    so that a snapshot has it too. The balls themselves are the kernel's (``world.balls``)."""
 
-    balls: np.ndarray  # (N, M, 5) float64: every ball slot
-    active: np.ndarray  # (N, M) bool: in play (on the table)
-    held: np.ndarray  # (N, M) bool: held by a saucer or a lock
     holder: np.ndarray  # (N, M) int64: the element holding it (-1: none)
     slot: np.ndarray  # (N, M) int64: its slot in a lock
     held_time: np.ndarray  # (N, M) float64: how long it has been held [s]
     released_from: np.ndarray  # (N, M) int64: the element it last left
 
 
-def ball_slots(world: Any) -> BallSlots:
-    """``world``'s several-ball arrays (it has the several-ball kernel) as a
-    :class:`BallSlots`: the arrays themselves, not copies."""
-    multi = world.multi
-    return BallSlots(multi.balls, multi.active, multi.held, world.holder, world.slot,
-                     world.held_time, world.released_from)  # fmt: skip
+def ball_holders(world: Any) -> BallHolders:
+    """``world``'s holder arrays as a :class:`BallHolders`: the arrays themselves, not copies."""
+    return BallHolders(world.holder, world.slot, world.held_time, world.released_from)
 
 
 class GameState(NamedTuple):
     """Everything that changes during play, for every env (the first axis)."""
 
-    world: State  # the kernel's arrays: balls, flippers, contacts, hits
+    world: State  # the kernel's arrays: the ball slots, flippers, contacts, hits
+    # The game's ball: the ball the rules play (the drain, the plunger, the ball search, the
+    # tilt). On a table of one ball, views of its slot (world.balls[:, 0], world.active[:, 0]);
+    # on a table of several, game.multiball's (the first in play, ball_slot).
+    game_ball: np.ndarray  # (N, 5) float64
+    game_ball_active: np.ndarray  # (N,) bool
     balls_left: np.ndarray  # (N,) int64: balls still to play, the one in play included
     score: np.ndarray  # (N,) int64: points scored in the current game
     drain_height: np.ndarray  # (N,) float64: where the last drained ball crossed the drain [m]
@@ -71,9 +70,8 @@ class GameState(NamedTuple):
     # The flipper commands and cabinet buttons the last frame pressed (with sticky actions,
     # repeat_action_probability, the next frame may press them again).
     pressed: np.ndarray  # (N, F + 4) bool
-    # Several balls (a trough of more than one, see ``game.multiball``); ``world.balls`` and
-    # ``world.active`` are then the game's ball, the first in play (ball_slot).
-    slots: BallSlots  # the World's ball slots
+    # Several balls (a trough of more than one, see ``game.multiball``).
+    holders: BallHolders  # what holds each ball slot (the World's saucers and locks)
     ball_slot: np.ndarray  # (N,) int64: the slot of the game's ball (-1: none)
     pending_balls: np.ndarray  # (N,) int64: balls the auto-plunger is still to launch
     multiball: np.ndarray  # (N,) bool: two or more balls are in play
@@ -92,7 +90,8 @@ def make_game_state(
     book: RuleBook,
     rule_set: RuleSet,
     n_flippers: int,
-    slots: BallSlots | None = None,
+    holders: BallHolders,
+    several: bool,
     n_locks: int = 0,
 ) -> GameState:
     """A :class:`GameState` around the kernel's ``world`` arrays (as many envs), every game at
@@ -103,21 +102,27 @@ def make_game_state(
         book: the table's rules compiled (``game.rulebook``): its rules and timers.
         rule_set: the table's rules as data (an empty ``RuleSet`` without): its lights, counters.
         n_flippers: the table's flippers.
-        slots: the World's ball slots (``ball_slots(world)``); None: zero-size.
+        holders: the World's holder arrays (``ball_holders(world)``).
+        several: the table has several balls (``game.multiball``): the game's ball is an array
+            of its own, else slot 0.
         n_locks: the table's locks.
     """
-    n_envs = len(world.active)
+    n_envs, n_balls = world.active.shape
     n_rules = len(book.trigger_kind)
 
     def zeros(*shape: int, dtype: type = np.int64) -> np.ndarray:
         return np.zeros((n_envs, *shape), dtype=dtype)
 
-    no_slots = BallSlots(zeros(0, 5, dtype=np.float64), zeros(0, dtype=bool),
-                         zeros(0, dtype=bool), zeros(0), zeros(0), zeros(0, dtype=np.float64),
-                         zeros(0))  # fmt: skip
-
+    if several:
+        game_ball, game_ball_active = zeros(world.balls.shape[2], dtype=np.float64), zeros(
+            dtype=bool
+        )
+    else:
+        game_ball, game_ball_active = world.balls[:, 0], world.active[:, 0]
     return GameState(
         world=world,
+        game_ball=game_ball,
+        game_ball_active=game_ball_active,
         balls_left=zeros(),
         score=zeros(),
         drain_height=zeros(dtype=np.float64),
@@ -144,7 +149,7 @@ def make_game_state(
         lights_were_on=zeros(n_rules, dtype=bool),
         flippers_before=zeros(n_flippers, dtype=bool),
         pressed=zeros(world.flipper_command.shape[1] + len(CABINET_BUTTONS), dtype=bool),
-        slots=slots if slots is not None else no_slots,
+        holders=holders,
         ball_slot=np.full(n_envs, -1, dtype=np.int64),
         pending_balls=zeros(),
         multiball=zeros(dtype=bool),
@@ -152,8 +157,8 @@ def make_game_state(
         multiball_events=zeros(2),
         multiballs=zeros(),
         lock_release=zeros(n_locks, dtype=bool),
-        ball_anchor=zeros(slots.balls.shape[1] if slots else 0, 2, dtype=np.float64),
-        ball_still=zeros(slots.balls.shape[1] if slots else 0),
+        ball_anchor=zeros(n_balls if several else 0, 2, dtype=np.float64),
+        ball_still=zeros(n_balls if several else 0),
     )
 
 

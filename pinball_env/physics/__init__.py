@@ -6,18 +6,19 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 - ``sweep.py``: swept ball-segment and ball-circle tests, point-segment distance;
 - ``flipper.py``: swept contact with a rotating flipper (a kinematic tapered capsule);
 - ``balls.py``: ball-ball contact, the swept test of two moving balls and the impulsive response;
-- ``multiball.py``: several balls per env (``MultiState``), the frame step with ball-ball contact
-  in one event loop (``step_balls``, ``step_multiworld``), and a helper to build and step such
-  a world (``make_multiball``); a kernel path of its own, for tables of several balls (the
-  game's multiball, ``game.multiball``);
+- ``multiball.py``: the frame step of several ball slots per env with ball-ball contact in one
+  event loop (``step_balls``, ``step_multiworld``), and a helper to build and step such a world
+  (``make_multiball``); the kernel of tables of several balls, saucers or locks (chosen once,
+  when the World is built);
 - ``step.py``: the world step over a batch of envs, split into named helpers;
 - ``near.py``: the broad phase, each ball's candidate set of the elements it can reach soon;
 - ``rays.py``: ray casts from the ball against walls, posts and flippers (the observation's rays);
 - ``cabinet.py``: the cabinet (a mass-spring-damper that a nudge shoves) and its plumb bob;
 - ``targets.py``: drop targets, spinners and kickbacks, and every crossing (sensors, the drain,
   spinner and kickback lines, the drop targets' sweep);
-- ``data.py``: the kernel's data (``Geometry``, ``Settings``, ``State``, ``Scratch``) and their
-  constructors ``make_state`` and ``make_scratch``;
+- ``data.py``: the kernel's data (``Geometry``, ``Settings``, ``State``: the ball slots,
+  (N, M) per env, and the rest of the env's state; ``Scratch``) and their constructors
+  ``make_state`` and ``make_scratch``;
 - ``columns.py``: what each column of those arrays means.
 """
 

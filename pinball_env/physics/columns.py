@@ -4,7 +4,7 @@ Kept in one place so that the table packer, the kernels and the environment agre
 column means. Units are SI throughout: metres, seconds, radians.
 """
 
-# Ball state, array of shape (n_envs, BALL_STATE_SIZE), float64.
+# Ball state, array of shape (n_envs, n_balls, BALL_STATE_SIZE), float64: a row per ball slot.
 BALL_X = 0  # centre x [m], to the right
 BALL_Y = 1  # centre y [m], up the playfield (towards the top of the table)
 BALL_VX = 2  # velocity x [m/s]
@@ -111,3 +111,34 @@ BOB_VY = 9  # [rad/s]
 BOB_TOUCHES = 10  # touches of the ring in the last frame (a count, as a float)
 BOB_ON_RING = 11  # 1 while the bob lies against the ring, 0 once it has swung clear
 CABINET_STATE_SIZE = 12
+
+# The several-ball kernel's work arrays (``physics.multiball``, ``data.Scratch``).
+# A ball's cached earliest element contact, (N, M, EVENT_SIZE) float64 (``Scratch.events``).
+EV_VALID = 0  # 1 while the ball keeps the path it was found for, 0: find it anew
+EV_USED = 1  # the time to the contact (the whole time left where there is none) [s]
+EV_REMAINING = 2  # the substep's time left when it was found [s]
+EV_NX = 3  # the contact normal, from the surface towards the ball
+EV_NY = 4
+EV_SVX = 5  # the surface's velocity at the contact [m/s] (a swinging flipper's)
+EV_SVY = 6
+EV_ELEMENT = 7  # its element id (-1: none within the time left)
+EV_CUT = 8  # 1 where a flipper sweep ran out of slices (the ball's substep ends there)
+EVENT_SIZE = 9
+
+# A ball's bookkeeping over one substep, (N, M, WORK_SIZE) float64 (``Scratch.work``; counts,
+# ids and flags stored as floats, exact).
+W_MOVING = 0  # 1 while the ball moves in this substep (in play, not held, not wedged)
+W_X0 = 1  # where it started the substep [m]
+W_Y0 = 2
+W_STALLED = 3  # its events in a row that made no progress
+W_LAST_REM = 4  # the substep's time left at its last event [s]
+W_LAST = 5  # the last two different elements it touched (-1: none) and their normals
+W_LAST_NX = 6
+W_LAST_NY = 7
+W_BEFORE = 8
+W_BEFORE_NX = 9
+W_BEFORE_NY = 10
+W_PUSHERS = 11  # bit j: flipper j pushed into it in this substep
+W_CHECK = 12  # 1: check its overlap at the substep's end (wedged, turning flipper, pair)
+W_WEDGED = 13  # 1: it stopped before the substep's end (wedged, cut or the pass cap)
+WORK_SIZE = 14

@@ -33,7 +33,9 @@ from pinball_env.physics.columns import (
     CONTACT_SIZE,
     CONTACT_SPEED,
     CONTACT_TIME,
+    EVENT_SIZE,
     SPIN_STATE_SIZE,
+    WORK_SIZE,
 )
 
 # Contacts logged per env and frame; more are counted but not logged. A frame of a ball rattling
@@ -82,10 +84,14 @@ class Settings(NamedTuple):
 
 
 class State(NamedTuple):
-    """Per-env state, updated in place by ``step_world``; the first axis is the env."""
+    """Per-env state, updated in place by the world step; the first axis is the env.
 
-    balls: np.ndarray  # (N, BALL_STATE_SIZE) float64
-    active: np.ndarray  # (N,) bool: the ball is in play; cleared when it drains
+    The balls are slots: M per env (M = 1 on a table of one ball), the second axis of
+    ``balls``, ``active`` and ``held``. A slot keeps its row when its ball drains (out of play)."""
+
+    balls: np.ndarray  # (N, M, BALL_STATE_SIZE) float64
+    active: np.ndarray  # (N, M) bool: the ball is in play; cleared when it drains
+    held: np.ndarray  # (N, M) bool, input: held in a lock or saucer (fixed, of infinite mass)
     flipper_angle: np.ndarray  # (N, F) float64 [rad]
     flipper_omega: np.ndarray  # (N, F) float64 [rad/s], at the end of the frame
     flipper_command: np.ndarray  # (N, F) bool, input: energised
@@ -112,10 +118,16 @@ class Scratch(NamedTuple):
     crossings: np.ndarray  # (N, K) float64: sensor crossings of one move [fraction]
     hit_elements: np.ndarray  # (N, max_passes) int64: hits of one substep, committed at its end
     cabinet_dv: np.ndarray  # (N, substeps, 2) float64: the cabinet's velocity change per substep
-    # The candidate set of each ball (see ``physics.near``): the elements it can reach soon.
-    near: np.ndarray  # (N, M) int64: walls' and posts' ids; flippers', targets', sensors' indexes
-    near_ends: np.ndarray  # (N, 4) int64: where each of those groups ends in the row of near
-    near_zone: np.ndarray  # (N, 3) float64: the zone's centre and radius [m] (radius < 0: none)
+    # The candidate set of each ball slot (see ``physics.near``): the elements it can reach soon.
+    near: np.ndarray  # (N, M, S) int64: walls', posts' ids; flippers', targets', sensors' indexes
+    near_ends: np.ndarray  # (N, M, 4) int64: where each of those groups ends in the row of near
+    near_zone: np.ndarray  # (N, M, 3) float64: the zone's centre and radius [m] (radius < 0: none)
+    # The several-ball kernel's (``physics.multiball``): per ball slot, its cached earliest
+    # element contact and its bookkeeping over a substep (columns ``EV_*`` and ``W_*``).
+    events: np.ndarray  # (N, M, EVENT_SIZE) float64
+    work: np.ndarray  # (N, M, WORK_SIZE) float64
+    dropped: np.ndarray  # (N, T) bool: drop targets hit in this substep (they drop at its end)
+    passes: np.ndarray  # (N,) int64: the event passes of the env's last frame (for the tests)
 
 
 @njit(cache=True, inline="always")
@@ -191,16 +203,19 @@ def segment_bounds(segments: np.ndarray) -> np.ndarray:
     return bounds
 
 
-def make_state(geometry: Geometry, n_envs: int, contact_capacity: int = CONTACT_CAPACITY) -> State:
-    """A zeroed :class:`State` for ``n_envs`` envs on ``geometry``: no ball in play, flippers at
-    angle 0 and released (``World`` then puts them at rest), drop targets up, spinners still,
-    kickbacks dark."""
-    if n_envs < 1:
-        raise ValueError(f"n_envs must be >= 1, got {n_envs}")
+def make_state(
+    geometry: Geometry, n_envs: int, n_balls: int = 1, contact_capacity: int = CONTACT_CAPACITY
+) -> State:
+    """A zeroed :class:`State` for ``n_envs`` envs of ``n_balls`` ball slots on ``geometry``: no
+    ball in play, none held, flippers at angle 0 and released (``World`` then puts them at
+    rest), drop targets up, spinners still, kickbacks dark."""
+    if n_envs < 1 or n_balls < 1:
+        raise ValueError(f"n_envs and n_balls must be >= 1, got {n_envs}, {n_balls}")
     n_flippers = geometry.flippers.shape[0]
     return State(
-        balls=np.zeros((n_envs, BALL_STATE_SIZE)),
-        active=np.zeros(n_envs, dtype=np.bool_),
+        balls=np.zeros((n_envs, n_balls, BALL_STATE_SIZE)),
+        active=np.zeros((n_envs, n_balls), dtype=np.bool_),
+        held=np.zeros((n_envs, n_balls), dtype=np.bool_),
         flipper_angle=np.zeros((n_envs, n_flippers)),
         flipper_omega=np.zeros((n_envs, n_flippers)),
         flipper_command=np.zeros((n_envs, n_flippers), dtype=np.bool_),
@@ -216,9 +231,12 @@ def make_state(geometry: Geometry, n_envs: int, contact_capacity: int = CONTACT_
     )
 
 
-def make_scratch(geometry: Geometry, settings: Settings, n_envs: int) -> Scratch:
-    """The work arrays of ``step_world`` for ``n_envs`` envs."""
+def make_scratch(
+    geometry: Geometry, settings: Settings, n_envs: int, n_balls: int = 1
+) -> Scratch:
+    """The work arrays of the world step for ``n_envs`` envs of ``n_balls`` ball slots."""
     flippers = (n_envs, geometry.flippers.shape[0])
+    slots = (n_envs, n_balls)
     return Scratch(
         targets=np.zeros(flippers),
         omegas=np.zeros(flippers),
@@ -229,9 +247,13 @@ def make_scratch(geometry: Geometry, settings: Settings, n_envs: int) -> Scratch
         crossings=np.zeros((n_envs, geometry.sensors.shape[0])),
         hit_elements=np.zeros((n_envs, settings.max_passes), dtype=np.int64),
         cabinet_dv=np.zeros((n_envs, settings.substeps, 2)),
-        near=np.zeros((n_envs, near_size(geometry)), dtype=np.int64),
-        near_ends=np.zeros((n_envs, 4), dtype=np.int64),
-        near_zone=np.full((n_envs, 3), -1.0),
+        near=np.zeros((*slots, near_size(geometry)), dtype=np.int64),
+        near_ends=np.zeros((*slots, 4), dtype=np.int64),
+        near_zone=np.full((*slots, 3), -1.0),
+        events=np.zeros((*slots, EVENT_SIZE)),
+        work=np.zeros((*slots, WORK_SIZE)),
+        dropped=np.zeros((n_envs, geometry.drop_targets.shape[0]), dtype=np.bool_),
+        passes=np.zeros(n_envs, dtype=np.int64),
     )
 
 

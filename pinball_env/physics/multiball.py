@@ -5,10 +5,11 @@ trough.
 
 What it holds:
 
-- ``MultiState``: the balls of every env, ``(N, M, BALL_STATE_SIZE)``, whether each is in play
-  and whether it is held (in a lock or saucer: it does not move and is a fixed circle);
-- ``MultiScratch``: each ball's candidate set (``physics.near``, one per ball), its cached
-  earliest element contact and its bookkeeping over a substep (columns ``EV_*`` and ``W_*``);
+- the balls are ``data.State``'s slots, ``(N, M, BALL_STATE_SIZE)``, whether each is in play
+  and whether it is held (in a lock or saucer: it does not move and is a fixed circle), as for
+  ``step.step_ball`` (which steps slot 0 of a one-ball table); ``data.Scratch`` has each slot's
+  candidate set (``physics.near``), its cached earliest element contact and its bookkeeping
+  over a substep (columns ``EV_*`` and ``W_*`` of ``physics.columns``);
 - :func:`step_balls`: one env's frame with M balls; :func:`step_multiworld`: the envs of a batch;
 - :func:`ball_overlap`, :func:`settle_balls`: the overlap and settle of ``step.deepest_overlap``
   and ``step.settle`` with the other balls counted (as circles of radius 2r at their centres);
@@ -16,9 +17,9 @@ What it holds:
   helper to build and step a multi-ball world (for the kernel's tests; ``sim.World`` holds the
   same arrays and steps them bitwise the same).
 
-The shared parts of the env (flippers, cabinet, drop targets, the contact log and hits) stay in
-``data.State`` and ``data.Scratch``; ``State.balls`` and ``State.active`` are not used here.
-``step.step_ball`` and ``step.step_world`` are untouched: every existing game stays bitwise.
+Which kernel steps a World is decided once, when it is built (``sim.World``): this one for a
+table of several balls (or with saucers or locks), ``step.step_world`` for the others, so every
+one-ball game stays bitwise what it was.
 
 The step. Per substep: the flipper schedule as ``step_ball`` has it; gravity (and the
 cabinet's frame force) on every free ball; then an event loop over the substep's time. In
@@ -64,7 +65,6 @@ the rest of the substep (the same, with one ball).
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -73,18 +73,39 @@ from pinball_env.physics.balls import respond_ball_ball, sweep_ball_ball
 from pinball_env.physics.cabinet import cabinet_frame
 from pinball_env.physics.columns import (
     BALL_SPIN,
-    BALL_STATE_SIZE,
     BALL_VX,
     BALL_VY,
     BALL_X,
     BALL_Y,
+    EV_CUT,
+    EV_ELEMENT,
+    EV_NX,
+    EV_NY,
+    EV_REMAINING,
+    EV_SVX,
+    EV_SVY,
+    EV_USED,
+    EV_VALID,
     FLIPPER_REST_ANGLE,
     KICKBACK_VX,
     KICKBACK_VY,
     PROP_FRICTION,
     PROP_KICK,
     PROP_RESTITUTION,
-    PROP_SIZE,
+    W_BEFORE,
+    W_BEFORE_NX,
+    W_BEFORE_NY,
+    W_CHECK,
+    W_LAST,
+    W_LAST_NX,
+    W_LAST_NY,
+    W_LAST_REM,
+    W_MOVING,
+    W_PUSHERS,
+    W_STALLED,
+    W_WEDGED,
+    W_X0,
+    W_Y0,
 )
 from pinball_env.physics.data import (
     Geometry,
@@ -97,7 +118,6 @@ from pinball_env.physics.data import (
     log_contact,
     make_scratch,
     make_state,
-    near_size,
 )
 from pinball_env.physics.near import (
     NEAR_DROP_TARGETS,
@@ -138,83 +158,6 @@ from pinball_env.physics.targets import (
     sweep_drop_targets,
     update_targets,
 )
-
-# A ball's cached earliest element contact, array of shape (N, M, EVENT_SIZE), float64.
-EV_VALID = 0  # 1 while the ball keeps the path it was found for, 0: find it anew
-EV_USED = 1  # the time to the contact (the whole time left where there is none) [s]
-EV_REMAINING = 2  # the substep's time left when it was found [s]
-EV_NX = 3  # the contact normal, from the surface towards the ball
-EV_NY = 4
-EV_SVX = 5  # the surface's velocity at the contact [m/s] (a swinging flipper's)
-EV_SVY = 6
-EV_ELEMENT = 7  # its element id (-1: none within the time left)
-EV_CUT = 8  # 1 where a flipper sweep ran out of slices (the ball's substep ends there)
-EVENT_SIZE = 9
-
-# A ball's bookkeeping over one substep, array of shape (N, M, WORK_SIZE), float64 (counts,
-# ids and flags stored as floats, exact).
-W_MOVING = 0  # 1 while the ball moves in this substep (in play, not held, not wedged)
-W_X0 = 1  # where it started the substep [m]
-W_Y0 = 2
-W_STALLED = 3  # its events in a row that made no progress
-W_LAST_REM = 4  # the substep's time left at its last event [s]
-W_LAST = 5  # the last two different elements it touched (-1: none) and their normals
-W_LAST_NX = 6
-W_LAST_NY = 7
-W_BEFORE = 8
-W_BEFORE_NX = 9
-W_BEFORE_NY = 10
-W_PUSHERS = 11  # bit j: flipper j pushed into it in this substep
-W_CHECK = 12  # 1: check its overlap at the substep's end (wedged, turning flipper, pair)
-W_WEDGED = 13  # 1: it stopped before the substep's end (wedged, cut or the pass cap)
-WORK_SIZE = 14
-
-
-class MultiState(NamedTuple):
-    """The balls of each env, updated in place by :func:`step_balls`; the first axis is the env,
-    the second the ball (a fixed slot: a drained ball keeps its slot, out of play)."""
-
-    balls: np.ndarray  # (N, M, BALL_STATE_SIZE) float64
-    active: np.ndarray  # (N, M) bool: the ball is on the table; cleared when it drains
-    held: np.ndarray  # (N, M) bool, input: held in a lock or saucer (fixed, of infinite mass)
-
-
-class MultiScratch(NamedTuple):
-    """Work arrays of :func:`step_balls`, one row per env and ball."""
-
-    near: np.ndarray  # (N, M, S) int64: each ball's candidate set (``physics.near``)
-    near_ends: np.ndarray  # (N, M, 4) int64
-    near_zone: np.ndarray  # (N, M, 3) float64 (radius < 0: none)
-    events: np.ndarray  # (N, M, EVENT_SIZE) float64: the cached earliest element contacts
-    work: np.ndarray  # (N, M, WORK_SIZE) float64: the substep's bookkeeping
-    dropped: np.ndarray  # (N, T) bool: drop targets hit in this substep (they drop at its end)
-    passes: np.ndarray  # (N,) int64: the event passes of the env's last frame (for the tests)
-
-
-def make_multi_state(n_envs: int, n_balls: int) -> MultiState:
-    """No ball in play, none held, for ``n_envs`` envs of ``n_balls`` slots."""
-    if n_envs < 1 or n_balls < 1:
-        raise ValueError(f"n_envs and n_balls must be >= 1, got {n_envs}, {n_balls}")
-    return MultiState(
-        balls=np.zeros((n_envs, n_balls, BALL_STATE_SIZE)),
-        active=np.zeros((n_envs, n_balls), dtype=np.bool_),
-        held=np.zeros((n_envs, n_balls), dtype=np.bool_),
-    )
-
-
-def make_multi_scratch(geometry: Geometry, n_envs: int, n_balls: int) -> MultiScratch:
-    """The work arrays of :func:`step_balls` for ``n_envs`` envs of ``n_balls`` slots."""
-    shape = (n_envs, n_balls)
-    return MultiScratch(
-        near=np.zeros((*shape, near_size(geometry)), dtype=np.int64),
-        near_ends=np.zeros((*shape, 4), dtype=np.int64),
-        near_zone=np.full((*shape, 3), -1.0),
-        events=np.zeros((*shape, EVENT_SIZE)),
-        work=np.zeros((*shape, WORK_SIZE)),
-        dropped=np.zeros((n_envs, geometry.drop_targets.shape[0]), dtype=np.bool_),
-        passes=np.zeros(n_envs, dtype=np.int64),
-    )
-
 
 # --- overlaps with the other balls -----------------------------------------------------------
 
@@ -317,7 +260,7 @@ def wedge(ball, w, remaining, h, geometry, angle, omegas, stops, targets, angles
 
 @njit(cache=True)
 def separate(ball, nx, ny, push, r, skin, geometry):
-    """Move ``ball`` (a row of ``MultiState.balls``) by ``push`` along n, away from the ball
+    """Move ``ball`` (a row of ``State.balls``) by ``push`` along n, away from the ball
     it touched. A push of up to a skin is made as it is (the ball, at least r off every
     surface, stays out of them); a longer one (balls that overlapped deeply, or a ball pushed
     off a fixed one) is swept against the walls and posts, as a swinging flipper's push is in
@@ -356,8 +299,8 @@ def cross_lines(state, env, geometry, x, y, vx, vy, dt, start):
 
 # Long by design, as step.step_ball: the hot loop of a multi-ball frame, written out.
 @njit(cache=True, inline="always")
-def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
-    """Advance env ``env`` by one frame in place with its M balls (``multi``'s rows): its
+def step_balls(geometry, settings, state, scratch, pair, env):
+    """Advance env ``env`` by one frame in place with its M ball slots: its
     flippers and every ball in play (module docstring). ``pair`` is the ball-ball material,
     a ``PROP_SIZE`` row (restitution, friction; the kick is not used). Returns whether every
     ball's state is finite afterwards."""
@@ -372,17 +315,17 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     flippers = geometry.flippers
     n_flippers = flippers.shape[0]
     gravity = norm(settings.gravity_x, settings.gravity_y)
-    balls, active, fixed = multi.balls[env], multi.active[env], multi.held[env]
+    balls, active, fixed = state.balls[env], state.active[env], state.held[env]
     n_balls = balls.shape[0]
-    near, near_ends, zone = mscratch.near[env], mscratch.near_ends[env], mscratch.near_zone[env]
-    events, work, dropped = mscratch.events[env], mscratch.work[env], mscratch.dropped[env]
+    near, near_ends, zone = scratch.near[env], scratch.near_ends[env], scratch.near_zone[env]
+    events, work, dropped = scratch.events[env], scratch.work[env], scratch.dropped[env]
     angle, omega = state.flipper_angle[env], state.flipper_omega[env]
     targets, omegas, stops = scratch.targets[env], scratch.omegas[env], scratch.stops[env]
     angles, pass_stops = scratch.angles[env], scratch.pass_stops[env]
     up = state.targets_up[env]
     state.contact_count[env] = 0
     state.hits[env, :] = 0
-    mscratch.passes[env] = 0
+    scratch.passes[env] = 0
     has_cabinet = geometry.cabinet.shape[0] > 0
     cabinet_dv = scratch.cabinet_dv[env]
     dvx = dvy = 0.0
@@ -430,7 +373,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
                 moving = 0
                 break
             passes += 1
-            mscratch.passes[env] += 1
+            scratch.passes[env] += 1
             elapsed = h - remaining
             for j in range(n_flippers):
                 angles[j] = flipper_angle_at(angle[j], omegas[j], stops[j], elapsed)
@@ -692,15 +635,13 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def step_multiworld(geometry, settings, state, scratch, multi, mscratch, pair, moving, start, stop):
+def step_multiworld(geometry, settings, state, scratch, pair, moving, start, stop):
     """:func:`step_balls` for the envs from ``start`` to ``stop`` for which ``moving`` is set
-    (``step.step_world``'s contract, with ``multi`` the balls). Returns the number of stepped
-    envs with a ball whose state is not finite afterwards."""
+    (``step.step_world``'s contract). Returns the number of stepped envs with a ball whose
+    state is not finite afterwards."""
     faults = 0
     for env in range(start, stop):
-        if moving[env] and not step_balls(
-            geometry, settings, state, scratch, multi, mscratch, pair, env
-        ):
+        if moving[env] and not step_balls(geometry, settings, state, scratch, pair, env):
             faults += 1
     return faults
 
@@ -710,20 +651,18 @@ def step_multiworld(geometry, settings, state, scratch, multi, mscratch, pair, m
 
 @dataclass
 class MultiWorld:
-    """A multi-ball world's arrays: the packed table, the shared state and scratch, the balls,
-    their scratch and the ball-ball material (a ``PROP_SIZE`` row)."""
+    """A multi-ball world's arrays: the packed table, the state and scratch (``n_balls`` slots
+    per env) and the ball-ball material (a ``PROP_SIZE`` row)."""
 
     geometry: Geometry
     settings: Settings
     state: State
     scratch: Scratch
-    multi: MultiState
-    mscratch: MultiScratch
     pair: np.ndarray
 
     @property
     def n_envs(self) -> int:
-        return self.multi.balls.shape[0]
+        return self.state.balls.shape[0]
 
 
 def make_multiball(
@@ -731,24 +670,17 @@ def make_multiball(
 ) -> MultiWorld:
     """A multi-ball world of ``n_envs`` envs with ``n_balls`` slots each on ``table``: no ball
     in play, flippers at rest, drop targets up, kickbacks as the table has them. ``pair`` is the
-    ball-ball (restitution, friction); by default the table's ``ball.material`` (restitution 1
-    and no friction where the table names none)."""
+    ball-ball (restitution, friction); by default the table's (``Table.pack_ball_pair``)."""
     geometry, settings = table.pack(), table.pack_settings()
-    state = make_state(geometry, n_envs)
+    state = make_state(geometry, n_envs, n_balls)
     state.flipper_angle[:] = geometry.flippers[:, FLIPPER_REST_ANGLE]
     for env in range(n_envs):
         state.kickback_lit[env] = [k.lit for k in table.kickbacks]
-    if pair is None:
-        material = table.ball.material
-        pair = (1.0, 0.0) if material is None else (
-            table.material(material).restitution, table.material(material).friction
-        )  # fmt: skip
-    props = np.zeros(PROP_SIZE)
-    props[PROP_RESTITUTION], props[PROP_FRICTION] = pair
-    return MultiWorld(
-        geometry, settings, state, make_scratch(geometry, settings, n_envs),
-        make_multi_state(n_envs, n_balls), make_multi_scratch(geometry, n_envs, n_balls), props,
-    )  # fmt: skip
+    props = table.pack_ball_pair()
+    if pair is not None:
+        props[PROP_RESTITUTION], props[PROP_FRICTION] = pair
+    scratch = make_scratch(geometry, settings, n_envs, n_balls)
+    return MultiWorld(geometry, settings, state, scratch, props)
 
 
 def place(
@@ -761,12 +693,12 @@ def place(
 ) -> None:
     """Put ball slot ``ball`` of env ``env`` in play at ``position`` with ``velocity``, no spin
     (``held``: fixed where it is)."""
-    row = world.multi.balls[env, ball]
+    row = world.state.balls[env, ball]
     row[:] = 0.0
     row[BALL_X], row[BALL_Y] = position
     row[BALL_VX], row[BALL_VY] = velocity
-    world.multi.active[env, ball] = True
-    world.multi.held[env, ball] = held
+    world.state.active[env, ball] = True
+    world.state.held[env, ball] = held
 
 
 def step_multiball(world: MultiWorld, moving: np.ndarray | None = None) -> int:
@@ -775,6 +707,6 @@ def step_multiball(world: MultiWorld, moving: np.ndarray | None = None) -> int:
     if moving is None:
         moving = np.ones(world.n_envs, dtype=np.bool_)
     return step_multiworld(
-        world.geometry, world.settings, world.state, world.scratch, world.multi, world.mscratch,
-        world.pair, moving, 0, world.n_envs,
+        world.geometry, world.settings, world.state, world.scratch, world.pair, moving, 0,
+        world.n_envs,
     )  # fmt: skip

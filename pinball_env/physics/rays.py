@@ -1,6 +1,6 @@
 """Ray casts from a point against a table's walls, posts and flippers (the state observation's
-"rays": what a state policy sees of the layout); on a table of several balls
-(:func:`cast_all_rays_seeing`) they also see the other balls and the standing drop targets.
+"rays": what a state policy sees of the layout); on a table of several balls they also see
+the other balls and the standing drop targets (:func:`cast_all_rays`).
 
 The ray tests are those of a point sweep (``sweep.py``: a ray against a segment, against a
 circle from outside), written for a unit direction and an unbounded length, which the
@@ -167,30 +167,18 @@ def ray_directions(n_rays):
     return directions
 
 
-@njit(cache=True, nogil=True)
-def cast_all_rays(balls, geometries, angles, n_rays, size, out, start, stop):
-    """:func:`cast_rays` for envs ``start`` to ``stop``, env i on ``geometries[i]``; ``size``:
-    at least the walls, posts and flippers of any of them (the width of ``State.hits`` will
-    do)."""
-    bounds, order = np.empty(size), np.empty(size, dtype=np.int64)
-    directions, sides = ray_directions(n_rays), np.empty((angles.shape[1], 2))
-    for env in range(start, stop):
-        cast_rays(balls[env, BALL_X], balls[env, BALL_Y], directions, geometries[env],
-                  angles[env], out[env], bounds, order, sides)  # fmt: skip
-
-
 @njit(cache=True, inline="always")
 def ray_balls_and_targets(x, y, dx, dy, balls, active, radius, targets, up):
     """Distance along the ray to the nearest other ball (a circle of ``radius`` at the centre of
     each ball of ``balls`` (M, 5) that ``active`` (M,) marks, in play or held; a ball centred on
-    (x, y), the ball the ray starts from, is not seen) or standing drop target (each row of
-    ``targets`` (T, 4) that ``up`` marks, a segment) (inf: none)."""
+    (x, y), the ball the ray starts from, is not seen) or standing drop target (each of the
+    first ``len(up)`` rows of ``targets`` (T, 4) that ``up`` marks, a segment) (inf: none)."""
     best = math.inf
     for b in range(balls.shape[0]):
         bx, by = balls[b, BALL_X], balls[b, BALL_Y]
         if active[b] and not (bx == x and by == y):
             best = min(best, ray_circle(x, y, dx, dy, bx, by, radius))
-    for t in range(targets.shape[0]):
+    for t in range(up.shape[0]):
         if up[t]:
             s = targets[t]
             best = min(best, ray_segment(x, y, dx, dy, s[0], s[1], s[2], s[3]))
@@ -198,24 +186,31 @@ def ray_balls_and_targets(x, y, dx, dy, balls, active, radius, targets, up):
 
 
 @njit(cache=True, nogil=True)
-def cast_all_rays_seeing(
-    balls, geometries, angles, n_rays, size, out, ball_states, ball_active, radius, targets_up,
-    start, stop,
+def cast_all_rays(
+    origins, geometries, angles, n_rays, size, out, balls, active, radius, targets_up, start,
+    stop,
 ):  # fmt: skip
-    """:func:`cast_all_rays`, the rays also seeing the other balls and the standing drop targets
-    (tables of several balls): env i's balls ``ball_states[i]`` (M, 5) where ``ball_active[i]``
-    (in play or held; of ``radius``), its drop targets where ``targets_up[i]``. Each ray reads
-    the nearer of :func:`cast_rays`'s distance and :func:`ray_balls_and_targets`'s (dividing by
-    RAY_RANGE keeps the order, so the walls' readings are bitwise :func:`cast_all_rays`'s)."""
+    """:func:`cast_rays` from ``origins[i]`` (a ball row) for envs ``start`` to ``stop``, env i on
+    ``geometries[i]``; ``size``: at least the walls, posts and flippers of any of them (the width
+    of ``State.hits`` will do). The rays also see env i's balls ``balls[i]`` (M, 5) where
+    ``active[i]`` (in play or held; of ``radius``) and its drop targets where ``targets_up[i]``:
+    each ray reads the nearer of :func:`cast_rays`'s distance and
+    :func:`ray_balls_and_targets`'s (dividing by RAY_RANGE keeps the order, so the walls'
+    readings are bitwise those of the walls alone). What the rays see besides the walls is
+    the caller's choice, made once: the observation of a table of several balls passes its
+    ball slots and targets, that of a table of one ball no columns (M = T = 0: the walls,
+    posts and flippers alone)."""
     bounds, order = np.empty(size), np.empty(size, dtype=np.int64)
     directions, sides = ray_directions(n_rays), np.empty((angles.shape[1], 2))
     for env in range(start, stop):
-        x, y = balls[env, BALL_X], balls[env, BALL_Y]
+        x, y = origins[env, BALL_X], origins[env, BALL_Y]
         geometry = geometries[env]
         cast_rays(x, y, directions, geometry, angles[env], out[env], bounds, order, sides)
+        if balls.shape[1] == 0 and targets_up.shape[1] == 0:
+            continue
         targets = geometry.drop_targets
         up = targets_up[env]
         for k in range(n_rays):
-            d = ray_balls_and_targets(x, y, directions[k, 0], directions[k, 1], ball_states[env],
-                                      ball_active[env], radius, targets, up)  # fmt: skip
+            d = ray_balls_and_targets(x, y, directions[k, 0], directions[k, 1], balls[env],
+                                      active[env], radius, targets, up)  # fmt: skip
             out[env, k] = min(out[env, k], d / RAY_RANGE)

@@ -464,7 +464,9 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     n_flippers = flippers.shape[0]
     skin = settings.skin
     gravity = norm(settings.gravity_x, settings.gravity_y)
-    near, near_ends, zone = scratch.near[env], scratch.near_ends[env], scratch.near_zone[env]
+    # A table of one ball: its slot 0 (``data.State``).
+    near, near_ends = scratch.near[env, 0], scratch.near_ends[env, 0]
+    zone = scratch.near_zone[env, 0]
     angle, omega = state.flipper_angle, state.flipper_omega
     targets, omegas, stops = scratch.targets[env], scratch.omegas[env], scratch.stops[env]
     angles, pass_stops = scratch.angles[env], scratch.pass_stops[env]
@@ -485,7 +487,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     n_lines = geometry.spinners.shape[0] + geometry.kickbacks.shape[0]
     has_targets = n_targets + n_lines > 0
     target_id = first_drop_target(geometry)
-    ball = state.balls[env]
+    ball = state.balls[env, 0]
     x, y, vx, vy, spin = ball[BALL_X], ball[BALL_Y], ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN]
     for k in range(settings.substeps):
         # The flipper schedule: each flipper's motion over the substep.
@@ -498,7 +500,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
         x0, y0 = x, y
         if has_cabinet:
             dvx, dvy = cabinet_dv[k, 0], cabinet_dv[k, 1]
-        if state.active[env]:
+        if state.active[env, 0]:
             # Relative to the cabinet, the ball feels its acceleration opposite (a frame force).
             vx += settings.gravity_x * h - dvx
             vy += settings.gravity_y * h - dvy
@@ -558,7 +560,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 if drain < INF:
                     x += vx * used * drain
                     y += vy * used * drain
-                    state.active[env] = False
+                    state.active[env, 0] = False
                     break
                 x += vx * used
                 y += vy * used
@@ -607,7 +609,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 if stalled >= MAX_STALLED_PASSES:
                     break
             pinched = False
-            if remaining > 0.0 and state.active[env]:
+            if remaining > 0.0 and state.active[env, 0]:
                 if not cut and before >= 0:  # a wedge: clear of both surfaces at once
                     x, y = unwedge(
                         x, y, last, last_nx, last_ny, before, before_nx, before_ny, geometry,
@@ -624,7 +626,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                         if held[j] and (pushers >> j) & 1 == 1:
                             stops[j] = 0.0
                 pinched = pinched and not cut
-            if state.active[env] and (remaining > 0.0 or turning_contact):
+            if state.active[env, 0] and (remaining > 0.0 or turning_contact):
                 # Only a turning flipper or a wedge can leave the ball inside a surface: the
                 # sweeps stop it at the first. Where it is left deeper than the skin, it is
                 # settled; where the surfaces leave it no room (a pocket that turning flippers
@@ -656,8 +658,8 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     ball[BALL_X], ball[BALL_Y] = x, y
     ball[BALL_VX], ball[BALL_VY], ball[BALL_SPIN] = vx, vy, spin
     if has_targets:
-        update_targets(geometry, state, env, state.balls[env : env + 1],
-                       state.active[env : env + 1], r, settings.dt)  # fmt: skip
+        update_targets(geometry, state, env, state.balls[env], state.active[env], r,
+                       settings.dt)  # fmt: skip
     return math.isfinite(x + y + vx + vy + spin)
 
 

@@ -128,7 +128,7 @@ def raise_banks(geometry, state, env, balls, active, r, dt):
 @njit(cache=True)
 def update_targets(geometry, state, env, balls, active, r, dt):
     """Env ``env``'s targets at the end of a frame of ``dt`` seconds, its balls ``balls`` (M, 5)
-    in play where ``active`` (M,) (one ball: ``state.balls[env : env + 1]``): the spinners turn
+    in play where ``active`` (M,) (its slots, ``state.balls[env]``): the spinners turn
     (their revolutions counted as hits), the banks rise."""
     spinner_id = first_spinner(geometry)
     for j in range(geometry.spinners.shape[0]):

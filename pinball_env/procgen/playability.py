@@ -194,7 +194,7 @@ def _roll(table: Table, starts: Starts, lane_x: float) -> str | tuple[np.ndarray
             raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
         if env < starts.launches and not entered[env]:
             return "a plunger shot does not enter the playfield"
-        x, y = world.balls[env, BALL_X], world.balls[env, BALL_Y]
+        x, y = world.balls[env, 0, BALL_X], world.balls[env, 0, BALL_Y]
         return f"a ball rests at ({x:.3f}, {y:.3f})"
     if (outcome == TIMED_OUT).any():
         x, y = starts.balls[int(np.argmax(outcome == TIMED_OUT))][0]
@@ -216,13 +216,13 @@ def _roll_balls(
     ``lane_x``, less a radius) and ``touched`` a flipper. Once a ball rests or breaks at frame
     ``f``, the later balls are rolled to ``f`` at most: only there can one end the check first.
     """
-    balls, active = state.balls, state.active
+    balls, active = state.balls, state.active  # a table of one ball: its slot 0
     contacts, contact_count = state.contacts, state.contact_count
     flipper_id = first_flipper(geometry)
     flipper_end = flipper_id + geometry.flippers.shape[0]
     limit = frames
     for env in range(balls.shape[0]):
-        anchor_x, anchor_y = balls[env, BALL_X], balls[env, BALL_Y]
+        anchor_x, anchor_y = balls[env, 0, BALL_X], balls[env, 0, BALL_Y]
         still = 0
         outcome[env], last_frame[env] = TIMED_OUT, limit
         for frame in range(limit):
@@ -230,10 +230,10 @@ def _roll_balls(
                 outcome[env], last_frame[env] = NOT_FINITE, frame
                 limit = frame + 1
                 break
-            if not active[env]:
+            if not active[env, 0]:
                 outcome[env], last_frame[env] = DRAINED, frame
                 break
-            x, y = balls[env, BALL_X], balls[env, BALL_Y]
+            x, y = balls[env, 0, BALL_X], balls[env, 0, BALL_Y]
             if x < lane_x - radius:
                 entered[env] = True
             for i in range(min(contact_count[env], contacts.shape[1])):

@@ -7,15 +7,13 @@ kernel, :func:`~pinball_env.physics.step_world`. :meth:`World.set_table` gives a
 its own (generated layouts): the World then steps every env on its own table in one call of
 :func:`~pinball_env.physics.step_tables`. Physics backends swap :meth:`World._advance`.
 
-Several balls (multiball). A table whose trough holds several balls gives every env
-``n_balls`` ball slots; such a table, or one with saucers or locks, is stepped by
-:func:`~pinball_env.physics.multiball.step_multiworld` (ball-ball contact, held balls), every
-other table by ``step_world`` exactly as before. Code written once for any number of balls reads
-``ball_states`` (N, M, 5), ``ball_active`` and ``ball_held`` (N, M) (for one ball, views over
-``balls`` and ``active``) and calls ``place_ball``/``launch`` with ``ball=``, ``hold_ball``,
-``release_ball`` and ``release_lock``. ``balls`` and ``active`` (and ``state.balls``,
-``state.active``) are ball 0's for one ball; with several they are not the balls: ``balls`` and
-``active`` raise, ``state.balls`` and ``state.active`` are left unused.
+Ball slots. Every env has ``n_balls`` ball slots (the table's trough; 1 on a table of one
+ball): ``balls`` (N, M, 5), ``active`` and ``held`` (N, M), the kernel's own arrays
+(``physics.State``); ``place_ball``/``launch`` take ``ball=``, and ``hold_ball``,
+``release_ball`` and ``release_lock`` hold and free them. Which kernel steps the slots is
+decided once, here, when the World is built: a table of several balls, or with saucers or
+locks, is stepped by :func:`~pinball_env.physics.multiball.step_multiworld` (ball-ball contact,
+held balls), every other table by ``step_world`` (its slot 0).
 
 Saucers and locks are played here, at the end of each frame (after the physics, for either backend;
 every env in one compiled pass, :func:`play_holders`): a free ball in play within a saucer's
@@ -56,7 +54,7 @@ from pinball_env.physics.columns import (
     FLIPPER_REST_ANGLE,
 )
 from pinball_env.physics.data import element_count, log_contact
-from pinball_env.physics.multiball import make_multi_scratch, make_multi_state, step_multiworld
+from pinball_env.physics.multiball import step_multiworld
 from pinball_env.sim.parallel import EnvThreads
 from pinball_env.sim.tables import EnvTables
 from pinball_env.table import BUTTONS, Table
@@ -253,6 +251,12 @@ def play_holders(balls, active, held, holder, slot, held_time, released_from, st
                 free[ball] = False
 
 
+def several_balls(table: Table) -> bool:
+    """Whether ``table`` needs the several-ball kernel: a trough of several balls, saucers or
+    locks (balls held in place, fixed circles to the others)."""
+    return table.n_balls > 1 or bool(table.saucers) or bool(table.locks)
+
+
 class World:
     """``n_envs`` independent balls and flipper sets, on the same table unless
     :meth:`set_table` gives some env another, stepped together.
@@ -271,9 +275,9 @@ class World:
         num_threads: threads that share the envs of a frame (the kernel releases the GIL; the
             results are bitwise the same for any count).
         n_balls: ball slots per env (``table.n_balls``: the trough's balls, else 1).
-        multi, mscratch, pair: the several-ball state (``physics.multiball.MultiState``), its
-            work arrays and the ball-ball material row (``table.pack_ball_pair()``), where the
-            table has several balls, saucers or locks; None otherwise (``step_world``).
+        several: the table has several balls, saucers or locks: the several-ball kernel
+            steps it (``swept_kernel`` False).
+        pair: the ball-ball material row (``table.pack_ball_pair()``).
     """
 
     # Whether the physics is the swept kernel's ``step_ball``, which compiled loops over frames
@@ -285,20 +289,15 @@ class World:
         self.threads = EnvThreads(num_threads)
         self._entry: Callable[..., int] | None = None
         self.tables = EnvTables(table, n_envs)
-        self.state = make_state(self.geometry, n_envs)
-        self.scratch = make_scratch(self.geometry, self.settings, n_envs)
+        self.n_balls = table.n_balls
+        self.state = make_state(self.geometry, n_envs, self.n_balls)
+        self.scratch = make_scratch(self.geometry, self.settings, n_envs, self.n_balls)
         # Column of the buttons array that drives each flipper.
         self.flipper_buttons = np.array(table.flipper_buttons, dtype=np.int64)
         self._everyone = np.ones(n_envs, dtype=bool)  # the kernel's mask that steps every env
-        self.n_balls = table.n_balls
-        self.multi: Any = None
-        self.mscratch: Any = None
-        self.pair: np.ndarray | None = None
-        if self.n_balls > 1 or table.saucers or table.locks:
-            self.multi = make_multi_state(n_envs, self.n_balls)
-            self.mscratch = make_multi_scratch(self.geometry, n_envs, self.n_balls)
-            self.pair = table.pack_ball_pair()
-            self._alias_ball_zero()
+        self.pair = table.pack_ball_pair()
+        self.several = several_balls(table)
+        if self.several:
             hits = np.zeros((n_envs, len(table.element_scores)), dtype=np.int64)
             self.state = self.state._replace(hits=hits)  # the saucers' and locks' ids too
             # The game's compiled loop must not call step_ball for it: it hands each frame
@@ -348,54 +347,23 @@ class World:
         """(n_envs, elements) int64: points per element id, per env."""
         return self.tables.scores
 
-    def _alias_ball_zero(self) -> None:
-        """With one ball slot, ``state.balls`` and ``state.active`` are the multi-ball arrays'
-        (views), so one-ball code reads and writes the ball the kernel steps."""
-        if self.multi is not None and self.n_balls == 1:
-            self.state = self.state._replace(
-                balls=self.multi.balls[:, 0], active=self.multi.active[:, 0]
-            )
-
-    # Shorthands for the arrays used most.
+    # Shorthands for the ball slots' arrays (the kernel's, ``state``).
     @property
     def balls(self) -> np.ndarray:
-        """(n_envs, 5) the ball of each env (one ball slot; several: use ``ball_states``)."""
-        if self.n_balls > 1:
-            raise AttributeError(
-                f"world.balls is one ball's; this table has {self.n_balls}: use "
-                "world.ball_states (n_envs, n_balls, 5)"
-            )
+        """(n_envs, n_balls, 5) every ball slot's state (columns ``BALL_*``), writable."""
         return self.state.balls
 
     @property
     def active(self) -> np.ndarray:
-        """(n_envs,) whether each env's ball is in play (one slot; several: ``ball_active``)."""
-        if self.n_balls > 1:
-            raise AttributeError(
-                f"world.active is one ball's; this table has {self.n_balls}: use "
-                "world.ball_active (n_envs, n_balls)"
-            )
+        """(n_envs, n_balls) bool: the ball is in play (cleared when it drains); writable."""
         return self.state.active
 
     @property
-    def ball_states(self) -> np.ndarray:
-        """(n_envs, n_balls, 5) every ball slot's state (columns ``BALL_*``), writable; for one
-        ball a view over ``balls``."""
-        return self.state.balls[:, None, :] if self.multi is None else self.multi.balls
-
-    @property
-    def ball_active(self) -> np.ndarray:
-        """(n_envs, n_balls) bool: the ball is in play (cleared when it drains); writable."""
-        return self.state.active[:, None] if self.multi is None else self.multi.active
-
-    @property
-    def ball_held(self) -> np.ndarray:
+    def held(self) -> np.ndarray:
         """(n_envs, n_balls) bool: the ball is held (a saucer, a lock, :meth:`hold_ball`): it
         does not move and is a fixed circle to the others. Read-only by convention: use
         :meth:`hold_ball` and :meth:`release_ball`."""
-        if self.multi is None:
-            return np.zeros((self.n_envs, 1), dtype=np.bool_)
-        return self.multi.held
+        return self.state.held
 
     def _check_ball(self, ball: int) -> int:
         if not 0 <= ball < self.n_balls:
@@ -406,8 +374,7 @@ class World:
         """Ball ``ball`` of env ``env`` is no longer held by anything."""
         self.holder[env, ball] = self.slot[env, ball] = -1
         self.held_time[env, ball] = 0.0
-        if self.multi is not None:
-            self.multi.held[env, ball] = False
+        self.state.held[env, ball] = False
 
     def place_ball(
         self,
@@ -434,11 +401,11 @@ class World:
                 f"ball speed {math.hypot(vx, vy):g} m/s is above {MAX_PLACE_SPEED:g} m/s"
             )
         ball = self._check_ball(ball)
-        row = self.ball_states[env, ball]
+        row = self.state.balls[env, ball]
         row[:] = 0.0
         row[BALL_X], row[BALL_Y] = position
         row[BALL_VX], row[BALL_VY] = velocity
-        self.ball_active[env, ball] = True
+        self.state.active[env, ball] = True
         self._free(env, ball)
         self.released_from[env, ball] = -1
 
@@ -460,18 +427,18 @@ class World:
         several-ball kernel (a table with a trough of several balls, saucers or locks) or the
         pymunk backend."""
         ball = self._check_ball(ball)
-        if self.multi is None:
+        if not self.several:
             raise ValueError(
                 f"table {self.table.name!r} has one ball and no saucer or lock: nothing holds "
                 "a ball"
             )
         self.place_ball(env, position, (0.0, 0.0), ball)
-        self.multi.held[env, ball] = True
+        self.state.held[env, ball] = True
 
     def release_ball(self, env: int, ball: int, velocity: tuple[float, float]) -> None:
         """Let env ``env``'s held ball ``ball`` go, where it is, at ``velocity`` [m/s]."""
         ball = self._check_ball(ball)
-        row = self.ball_states[env, ball]
+        row = self.state.balls[env, ball]
         self.place_ball(env, (row[BALL_X], row[BALL_Y]), velocity, ball)
         self.released_from[env, ball] = -1
 
@@ -490,8 +457,8 @@ class World:
         """The saucers and locks at the end of a frame (module docstring), every env in one
         compiled pass (:func:`play_holders`)."""
         stepped = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
-        multi = self.multi
-        play_holders(multi.balls, multi.active, multi.held, self.holder, self.slot,
+        state = self.state
+        play_holders(state.balls, state.active, state.held, self.holder, self.slot,
                      self.held_time, self.released_from, self.state, stepped, self._holders,
                      self.settings.dt)  # fmt: skip
 
@@ -507,14 +474,11 @@ class World:
         speeds = np.asarray(speeds, dtype=np.float64)
         self._check_speeds(speeds)
         balls = self.state.balls
-        balls[envs] = 0.0
-        balls[envs, BALL_X] = [x for x, _ in positions]
-        balls[envs, BALL_Y] = [y for _, y in positions]
-        balls[envs, BALL_VY] = speeds
-        self.state.active[envs] = True
-        if self.n_balls > 1:  # ball 0's slot (state.balls is not the balls)
-            self.ball_states[envs, 0] = balls[envs]
-            self.ball_active[envs, 0] = True
+        balls[envs, 0] = 0.0
+        balls[envs, 0, BALL_X] = [x for x, _ in positions]
+        balls[envs, 0, BALL_Y] = [y for _, y in positions]
+        balls[envs, 0, BALL_VY] = speeds
+        self.state.active[envs, 0] = True
         for env in envs:
             self._free(int(env), 0)
             self.released_from[env, 0] = -1
@@ -554,7 +518,7 @@ class World:
         buttons (its other elements may differ in number and kind). Tables of several balls,
         saucers or locks play alone (a ValueError: the several-ball kernel takes one table)."""
         for which in (self.table, table):
-            if self.multi is not None or which.n_balls > 1 or which.saucers or which.locks:
+            if several_balls(which):
                 raise ValueError(
                     f"table {which.name!r} has several balls, saucers or locks: a World of it "
                     "plays one table in every env"
@@ -625,9 +589,9 @@ class World:
             else:
                 self.state.flipper_command[envs] = commands[envs]
         if self._advance(envs):
-            bad = np.flatnonzero(~np.isfinite(self.ball_states).all(axis=(1, 2))).tolist()
+            bad = np.flatnonzero(~np.isfinite(self.state.balls).all(axis=(1, 2))).tolist()
             raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
-        if self.multi is not None and (self.table.saucers or self.table.locks):
+        if self.table.saucers or self.table.locks:
             self._play_holders(envs)
 
     def _advance(self, envs: np.ndarray | None = None) -> int:
@@ -637,9 +601,8 @@ class World:
         moving = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
         if moving.shape != (self.n_envs,):
             raise ValueError(f"envs must have shape ({self.n_envs},), got {moving.shape}")
-        if self.multi is not None:
-            args = (self.geometry, self.settings, self.state, self.scratch, self.multi,
-                    self.mscratch, self.pair, moving)  # fmt: skip
+        if self.several:
+            args = (self.geometry, self.settings, self.state, self.scratch, self.pair, moving)
         elif self.tables.varied:
             geometries, settings = self.tables.kernel_arrays()
             args = (geometries, settings, self.state, self.scratch, moving)
@@ -652,7 +615,7 @@ class World:
         arrays' types."""
         if self._entry is None:
             step = step_tables if self.tables.varied else step_world
-            if self.multi is not None:
+            if self.several:
                 step = step_multiworld
             self._entry = compiled_entry(step, (*args, 0, 0))
         return self._entry
@@ -661,10 +624,6 @@ class World:
         state = self.__dict__.copy()
         state["_entry"] = None  # a compiled function cannot be pickled; a copy finds its own
         return state
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        self._alias_ball_zero()  # a pickle copies views apart
 
     def frame_points(self) -> np.ndarray:
         """Points scored by each env in the last frame, (n_envs,) int64."""
@@ -690,7 +649,7 @@ class World:
         path = np.empty((n_frames, 2))
         for frame in range(n_frames):
             self.step(buttons)
-            path[frame] = self.ball_states[env, 0, [BALL_X, BALL_Y]]
+            path[frame] = self.state.balls[env, 0, [BALL_X, BALL_Y]]
         return path
 
 

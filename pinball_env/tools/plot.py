@@ -132,7 +132,7 @@ def plot_table(
     if trace_frames > 0:
         world = World(table)
         world.place_ball(0, table.ball.start, velocity or table.ball.velocity)
-        path = np.vstack([world.balls[0, :2], world.trace(trace_frames)])
+        path = np.vstack([world.balls[0, 0, :2], world.trace(trace_frames)])
         draw_path(ax, path, table.simulation.frame_rate)
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -192,7 +192,7 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
         world = env.game.world.state
         shown = env.game.state.lights[0].sum() + (~world.targets_up[0]).sum()
         shown += world.kickback_lit[0].sum() + info["bonus_multiplier"]
-        if shown > best and env.game.world.state.active[0]:
+        if shown > best and env.game.state.game_ball_active[0]:
             best, frame = shown, env.render()
     fig = plt.figure(figsize=(10, 6.2))
     grid = fig.add_gridspec(1, 2, width_ratios=(1, 1.5))
@@ -352,12 +352,12 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     env.reset(seed=0, options={"ball_position": [0.24, 0.42], "ball_velocity": [0.0, 0.3]})
     game = env.game
     times, offsets, relative = [], [], []
-    velocity0 = game.world.balls[0, 2]
+    velocity0 = game.state.game_ball[0, 2]
     for step in range(24):
         env.step(8 if step == 5 else 0)  # one nudge left
         times.append(step / rate)
         offsets.append(1000 * game.world.state.cabinet[0, 0])
-        relative.append(game.world.balls[0, 2] - velocity0)
+        relative.append(game.state.game_ball[0, 2] - velocity0)
     ax = fig.add_subplot(grid[0, 1])
     ax.plot(times, offsets, color="#1d3557", label="cabinet offset x [mm]")
     ax.plot(times, np.array(relative) * 10, color="#e63946",

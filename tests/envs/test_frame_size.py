@@ -49,7 +49,7 @@ def test_procgen_frames_have_one_size_with_the_table_fitted_in(difficulty):
         top, left = (height - inner_height) // 2, (width - inner_width) // 2
         world = env.unwrapped.game.world
         alone = Renderer(table, inner_width, inner_height).frame(
-            tuple(world.balls[0, :2]), world.state.flipper_angle[0]
+            tuple(world.balls[0, 0, :2]), world.state.flipper_angle[0]
         )
         playfield = frame[:, :width]
         assert playfield[top : top + inner_height, left : left + inner_width].tobytes() == (
@@ -86,7 +86,7 @@ def test_pinball_v0_frames_are_as_they_were():
     assert frame.shape == (642, 306 + SCOREBOARD_WIDTH, 3) == (height, width + SCOREBOARD_WIDTH, 3)
     world = env.unwrapped.game.world
     playfield = Renderer(table, width, height).frame(
-        tuple(world.balls[0, :2]), world.state.flipper_angle[0]
+        tuple(world.balls[0, 0, :2]), world.state.flipper_angle[0]
     )
     assert frame[:, :width].tobytes() == playfield.tobytes()
 

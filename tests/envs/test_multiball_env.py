@@ -151,7 +151,7 @@ def test_the_frame_and_the_picture_show_every_ball():
         more_balls(one, 0)
         for _ in range(40):
             obs, *_ = one.step(0)
-        assert one.unwrapped.game.world.ball_active[0].sum() == 3
+        assert one.unwrapped.game.world.active[0].sum() == 3
         counts.append((first, ball_pixels(one.render() if one is env else obs)))
     for first, three in counts:
         assert first > 0 and three >= 2.5 * first

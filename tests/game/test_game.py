@@ -1,6 +1,7 @@
 """The rules over a batch of envs: N games in one Game are N single games, bitwise; snapshots."""
 
 import copy
+import pickle
 
 import numpy as np
 import pytest
@@ -85,6 +86,11 @@ def test_restore_writes_into_the_arrays_the_kernel_uses():
     balls = game.world.state.balls
     game.restore(game.snapshot())
     assert game.world.state.balls is balls and game.state.world is game.world.state
+    # On a table of one ball the game's ball is the World's slot 0, also after a pickle.
+    for one in (game, pickle.loads(pickle.dumps(game))):
+        assert np.shares_memory(one.state.game_ball, one.world.balls)
+        one.world.place_ball(0, (0.2, 0.3))
+        assert one.state.game_ball[0, 0] == 0.2 and one.state.game_ball_active[0]
 
 
 @pytest.mark.parametrize(
@@ -166,7 +172,7 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
         ended = np.zeros(n, dtype=bool)
         frames = np.zeros(n, dtype=np.int64)
         for frame in range(k + MAX_RUN_ON_FRAMES):
-            high = framing.world.balls[:, 1] > line * CLASSIC.height
+            high = framing.world.balls[:, 0, 1] > line * CLASSIC.height
             going = ~ended & ((frame < k) | (high & framing.world.active))
             if not going.any():
                 break
@@ -179,7 +185,7 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
         observed = [StateObserver(game).observe().tobytes() for game in (skipping, framing)]
         assert observed[0] == observed[1]
         assert (skipping.state.frames == framing.state.frames).all()
-        high = skipping.world.balls[:, 1] > line * CLASSIC.height
+        high = skipping.world.balls[:, 0, 1] > line * CLASSIC.height
         asked_high = high & skipping.world.active & ~over
         assert (frames[asked_high] == k + MAX_RUN_ON_FRAMES).all()  # only after the most
         high_asks += int(asked_high.sum())

@@ -18,7 +18,7 @@ N_ENVS = 16
 
 def reference_after_frame(multi, envs):
     """``Multiball.after_frame`` as the per-env Python of its first version."""
-    state, world = multi.game.state, multi.game.world
+    state, world = multi.state, multi.world
     for env in envs:
         state.multiball_events[env] = 0
         tilted = bool(state.world.tilted[env])
@@ -26,7 +26,7 @@ def reference_after_frame(multi, envs):
             state.pending_balls[env] = 0
             state.multiball_save[env] = 0
             state.lock_release[env] = False
-        drained = multi._was_active[env] & ~world.ball_active[env]
+        drained = multi._was_active[env] & ~world.active[env]
         n_drained = int(drained.sum())
         if n_drained and state.multiball_save[env] > 0:
             state.pending_balls[env] += n_drained
@@ -37,15 +37,15 @@ def reference_after_frame(multi, envs):
             in_play = bool(multi.playing(env)[ball])
             if ball == game_ball:
                 continue
-            xy = world.ball_states[env, ball, [BALL_X, BALL_Y]]
+            xy = world.balls[env, ball, [BALL_X, BALL_Y]]
             gap = xy - state.ball_anchor[env, ball]
-            if not in_play or world.ball_held[env, ball] or gap @ gap > multi.radius2:
+            if not in_play or world.held[env, ball] or gap @ gap > multi.radius2:
                 state.ball_anchor[env, ball] = xy
                 state.ball_still[env, ball] = 0
             else:
                 state.ball_still[env, ball] += 1
                 if state.ball_still[env, ball] >= multi.search_frames:
-                    world.ball_active[env, ball] = False
+                    world.active[env, ball] = False
                     state.ball_still[env, ball] = 0
                     stuck += 1
         if stuck and not tilted:
@@ -54,10 +54,10 @@ def reference_after_frame(multi, envs):
             tilted
             and game_ball >= 0
             and multi.playing(env).sum() > 1
-            and not world.ball_held[env, game_ball]
+            and not world.held[env, game_ball]
             and state.still_frames[env] >= multi.search_frames
         ):
-            world.ball_active[env, game_ball] = False
+            world.active[env, game_ball] = False
         in_play = int(multi.playing(env).sum()) + int(state.pending_balls[env])
         took = world.state.hits[env, multi.lock_ids].sum() > 0
         if took and in_play == 0 and not (n_drained or state.on_plunger[env] or tilted):
@@ -79,7 +79,7 @@ def reference_after_frame(multi, envs):
 def reference_play_holders(world, stepped):
     """``World._play_holders`` as the table-wide NumPy and per-env Python of its first version."""
     table, r, dt = world.table, world.settings.radius, world.settings.dt
-    states, active, held = world.ball_states, world.ball_active, world.multi.held
+    states, active, held = world.balls, world.active, world.held
     xy = states[..., [BALL_X, BALL_Y]]
     speed = np.hypot(states[..., BALL_VX], states[..., BALL_VY])
     free = active & ~held & stepped[:, None]
@@ -144,17 +144,17 @@ def stir(game, rng):
     """Put the envs of ``game`` in states that random play rarely reaches: balls drained,
     stuck, dropped slowly at the saucer and the lock's slots, tilts and ball saves."""
     state, world = game.state, game.world
-    n, m = world.ball_active.shape
+    n, m = world.active.shape
     spots = [TABLE.saucers[0].center, *TABLE.locks[0].slots]
     for env in range(n):
         for ball in range(m):
-            if rng.random() < 0.2 and not world.ball_held[env, ball]:
+            if rng.random() < 0.2 and not world.held[env, ball]:
                 x, y = spots[rng.integers(len(spots))]
                 jitter = rng.normal(0.0, 0.01, 2)
                 speed = rng.uniform(0.0, 1.5, 2)
                 world.place_ball(env, (x + jitter[0], y + jitter[1]), tuple(speed), ball=ball)
             if rng.random() < 0.1:
-                world.ball_active[env, ball] = False  # drained
+                world.active[env, ball] = False  # drained
             if rng.random() < 0.1:
                 state.ball_still[env, ball] = game.ball_search_frames - 1
         state.world.tilted[env] = rng.random() < 0.15

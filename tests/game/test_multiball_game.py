@@ -26,12 +26,12 @@ def new_game(position=(0.25, 0.5), velocity=(0.0, 0.0), seed=0):
 
 
 def in_play(game):
-    return int((game.world.ball_active[0] & ~locked(game)).sum())
+    return int((game.world.active[0] & ~locked(game)).sum())
 
 
 def locked(game):
     world = game.world
-    return world.ball_held[0] & np.isin(world.holder[0], world.lock_ids)
+    return world.held[0] & np.isin(world.holder[0], world.lock_ids)
 
 
 def lights(game):
@@ -56,7 +56,7 @@ def start_multiball(game, rng):
     """Lock two balls: the second lock starts the multiball."""
     step_until(game, rng, lambda: locked(game).sum() == 1 and in_play(game) == 1)
     assert game.state.balls_left[0] == 3  # a ball was served
-    free = np.flatnonzero(game.world.ball_active[0] & ~game.world.ball_held[0])
+    free = np.flatnonzero(game.world.active[0] & ~game.world.held[0])
     game.world.place_ball(0, LOCK.slots[1], (0.0, 0.0), ball=int(free[0]))
     step_until(game, rng, lambda: game.state.multiball[0])
 
@@ -80,7 +80,7 @@ def test_a_ball_drains_back_to_the_trough_and_is_lost_only_when_the_last_drains(
     assert 1 in seen
     assert game.state.balls_left[0] == 2 and game.state.drained[0]
     assert game.state.on_plunger[0] and not game.state.multiball[0]
-    assert game.world.ball_active[0].sum() == 0  # every ball back (the next on the plunger)
+    assert game.world.active[0].sum() == 0  # every ball back (the next on the plunger)
 
 
 def test_the_auto_plunger_launches_one_ball_at_a_time_from_the_trough():
@@ -89,7 +89,7 @@ def test_the_auto_plunger_launches_one_ball_at_a_time_from_the_trough():
     launched = []
     for _ in range(200):
         game.step(NOOP, [rng])
-        launched.append(int(game.world.ball_active[0].sum()))
+        launched.append(int(game.world.active[0].sum()))
     assert max(np.diff(launched)) <= 1  # one a frame at most
     assert max(launched) == 3 and game.state.pending_balls[0] == 0
 
@@ -116,7 +116,7 @@ def test_a_ball_that_drains_during_the_multiballs_ball_save_is_launched_again():
     start_multiball(game, rng)
     assert game.state.multiball_save[0] > 0
     step_until(game, rng, lambda: in_play(game) == 3)
-    ball = int(np.flatnonzero(game.world.ball_active[0])[0])
+    ball = int(np.flatnonzero(game.world.active[0])[0])
     game.world.place_ball(0, (0.25, 0.034), (0.0, -2.0), ball=ball)  # drains this frame
     game.step(NOOP, [rng])
     assert game.state.pending_balls[0] == 1 or in_play(game) == 3
@@ -124,7 +124,7 @@ def test_a_ball_that_drains_during_the_multiballs_ball_save_is_launched_again():
     assert game.state.balls_left[0] == 3
     # After the save, a drain is a ball back to the trough.
     game.state.multiball_save[0] = 0
-    ball = int(np.flatnonzero(game.world.ball_active[0])[0])
+    ball = int(np.flatnonzero(game.world.active[0])[0])
     game.world.place_ball(0, (0.25, 0.034), (0.0, -2.0), ball=ball)
     game.step(NOOP, [rng])
     assert in_play(game) == 2 and game.state.pending_balls[0] == 0
@@ -136,7 +136,7 @@ def test_the_jackpot_scores_only_while_lit():
     assert game.state.points[0] == SAUCER.score and "jackpot" not in events(game)
     game, rng = new_game(LOCK.slots[0])
     start_multiball(game, rng)
-    ball = int(np.flatnonzero(game.world.ball_active[0] & ~game.world.ball_held[0])[0])
+    ball = int(np.flatnonzero(game.world.active[0] & ~game.world.held[0])[0])
     game.world.place_ball(0, SAUCER.center, (0.0, 0.0), ball=ball)
     game.step(NOOP, [rng])
     assert "jackpot" in events(game)
@@ -147,20 +147,20 @@ def test_the_game_ball_is_the_first_in_play_and_a_snapshot_restores_every_ball()
     game, rng = new_game()
     game.state.pending_balls[0] = 2
     step_until(game, rng, lambda: in_play(game) == 3)
-    first = int(np.flatnonzero(game.world.ball_active[0])[0])
+    first = int(np.flatnonzero(game.world.active[0])[0])
     assert game.state.ball_slot[0] == first
-    assert np.array_equal(game.world.state.balls[0], game.world.ball_states[0, first])
+    assert np.array_equal(game.state.game_ball[0], game.world.balls[0, first])
     snapshot = game.snapshot()
     rng_state = rng.bit_generator.state
     trace = []
     for _ in range(100):
         game.step(NOOP, [rng])
-        trace.append(game.world.ball_states.copy())
+        trace.append(game.world.balls.copy())
     game.restore(snapshot)
     rng.bit_generator.state = rng_state
     for expected in trace:
         game.step(NOOP, [rng])
-        assert np.array_equal(game.world.ball_states, expected)
+        assert np.array_equal(game.world.balls, expected)
 
 
 @settings(max_examples=4)
@@ -177,9 +177,9 @@ def test_random_play_keeps_every_ball_sound(seed):
         if game.state.balls_left[0] == 0:
             game.new_game(0, rng)
             game.state.pending_balls[0] = 2
-        balls = game.world.ball_states[0]
+        balls = game.world.balls[0]
         assert np.isfinite(balls).all()
-        active = np.flatnonzero(game.world.ball_active[0])
+        active = np.flatnonzero(game.world.active[0])
         xy = balls[active][:, [BALL_X, BALL_Y]]
         assert ((xy >= 0.0) & (xy <= (TABLE.width, TABLE.height))).all()
         for i in range(len(active)):
@@ -234,9 +234,9 @@ def test_random_play_on_generated_tables_with_a_lock_keeps_every_ball_sound(seed
         if game.state.pending_balls[0] == 0 and not game.state.multiball[0]:
             game.state.pending_balls[0] = 2
         game.step(np.array([action]), [rng])
-        balls = game.world.ball_states[0]
+        balls = game.world.balls[0]
         assert np.isfinite(balls).all()
-        active = np.flatnonzero(game.world.ball_active[0])
+        active = np.flatnonzero(game.world.active[0])
         xy = balls[active][:, [BALL_X, BALL_Y]]
         assert ((xy >= 0.0) & (xy <= (table.width, table.height))).all()
         for i in range(len(active)):
@@ -269,7 +269,7 @@ def play_pinned(game, rng, pins, until, limit):
         if until():
             return frame
         for ball, places in pins.items():
-            if world.ball_active[0, ball] and not world.ball_held[0, ball]:
+            if world.active[0, ball] and not world.held[0, ball]:
                 world.place_ball(0, places[frame % len(places)], ball=ball)
         game.step(NOOP, [rng])
     raise AssertionError("never happened")
@@ -279,14 +279,14 @@ def test_a_stuck_ball_that_is_not_the_games_ball_goes_back_to_the_trough_and_is_
     game, rng = two_balls_in_play()
     search = game.multi.search_frames
     pins = {0: MOVING, 1: STUCK}
-    frames = play_pinned(game, rng, pins, lambda: not game.world.ball_active[0, 1], 2 * search)
+    frames = play_pinned(game, rng, pins, lambda: not game.world.active[0, 1], 2 * search)
     assert search <= frames <= search + 2
-    assert game.state.balls_left[0] == 3 and game.world.ball_active[0, 0]  # none lost
+    assert game.state.balls_left[0] == 3 and game.world.active[0, 0]  # none lost
     assert game.state.pending_balls[0] == 1  # served again: queued for the auto-plunger
     assert not game.state.multiball_events[0, 1]  # two balls still count: no multiball end
     game.step(NOOP, [rng])  # the auto-plunger launches it up the shooter lane
     assert in_play(game) == 2 and game.state.pending_balls[0] == 0
-    launched = game.world.ball_states[0, 1]
+    launched = game.world.balls[0, 1]
     assert launched[BALL_X] == TABLE.plunger.position[0] and launched[BALL_VY] > 0.0
 
 
@@ -299,10 +299,10 @@ def test_a_stuck_ball_that_becomes_the_games_ball_keeps_its_clock():
     pins = {0: MOVING, 1: STUCK}
     start = game.state.frames[0]
     play_pinned(game, rng, pins, lambda: game.state.frames[0] - start >= half, search)
-    game.world.ball_active[0, 0] = False  # ball 0 goes back to the trough (as if drained)
+    game.world.active[0, 0] = False  # ball 0 goes back to the trough (as if drained)
     game.state.multiball_save[0] = 0
     pins = {1: STUCK}
-    served = lambda: game.world.ball_states[0, 1, BALL_X] == TABLE.plunger.position[0]  # noqa: E731
+    served = lambda: game.world.balls[0, 1, BALL_X] == TABLE.plunger.position[0]  # noqa: E731
     play_pinned(game, rng, pins, served, search)
     assert search <= game.state.frames[0] - start <= search + 3  # not half + search
     assert game.state.ball_slot[0] == 1 and game.state.balls_left[0] == 3
@@ -340,13 +340,13 @@ def test_tilted_a_ball_that_lies_still_is_given_up_and_not_served_again():
     search = game.multi.search_frames
     # The other ball lies still: given up (back to the trough), nothing queued.
     pins = {0: MOVING, 1: STUCK}
-    frames = play_pinned(game, rng, pins, lambda: not game.world.ball_active[0, 1], 2 * search)
+    frames = play_pinned(game, rng, pins, lambda: not game.world.active[0, 1], 2 * search)
     assert search <= frames <= search + 2
     assert game.state.pending_balls[0] == 0 and game.state.balls_left[0] == 3
     # The game's ball lies still too: given up where it lies, and the ball is lost, once.
     pins = {0: STUCK}
     play_pinned(game, rng, pins, lambda: game.state.balls_left[0] < 3, 2 * search)
-    assert game.state.balls_left[0] == 2 and game.world.ball_active[0].sum() == 0
+    assert game.state.balls_left[0] == 2 and game.world.active[0].sum() == 0
 
 
 def test_tilted_the_games_ball_lying_still_is_given_up_while_another_plays_on():
@@ -355,8 +355,8 @@ def test_tilted_the_games_ball_lying_still_is_given_up_while_another_plays_on():
     game.state.world.tilted[0] = True
     search = game.multi.search_frames
     pins = {0: STUCK, 1: ((0.3, 0.9), (0.3, 0.95))}
-    frames = play_pinned(game, rng, pins, lambda: not game.world.ball_active[0, 0], 2 * search)
+    frames = play_pinned(game, rng, pins, lambda: not game.world.active[0, 0], 2 * search)
     assert search <= frames <= search + 2
     # Ball 1 plays on as the game's ball; no ball lost, none queued.
-    assert game.state.ball_slot[0] == 1 and game.state.world.active[0]
+    assert game.state.ball_slot[0] == 1 and game.state.game_ball_active[0]
     assert game.state.balls_left[0] == 3 and game.state.pending_balls[0] == 0

@@ -82,7 +82,7 @@ def test_a_nudge_changes_a_flying_balls_velocity_by_the_cabinets_opposite(table)
         world.step()
         assert world.state.contact_count[0] == 0
         t = frame * dt
-        ball = world.balls[0]
+        ball = world.balls[0, 0]
         # Relative to the table the ball lost exactly what the cabinet gained, beside gravity.
         assert ball[BALL_VX] - (0.3 + gx * t) == pytest.approx(-cabinet[CABINET_VX], abs=1e-12)
         assert ball[BALL_VY] - (0.4 + gy * t) == pytest.approx(-cabinet[CABINET_VY], abs=1e-12)
@@ -188,7 +188,7 @@ def test_a_tilted_machines_kickers_are_dead(table):
         world.state.tilted[0] = tilted
         for _ in range(3):
             world.step()
-        speeds.append(math.hypot(*world.balls[0, [BALL_VX, BALL_VY]]))
+        speeds.append(math.hypot(*world.balls[0, 0, [BALL_VX, BALL_VY]]))
     assert speeds[0] > 1.5 > speeds[1]  # the kick of 1.5 m/s only while not tilted
 
 

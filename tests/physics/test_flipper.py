@@ -195,7 +195,7 @@ def flipper_world(slope_deg=0.0, friction=0.0, walls=True, substeps=10, extra_wa
 def local_v(world):
     """The ball centre's coordinate across the flipper axis, in the flipper frame."""
     angle = world.state.flipper_angle[0, 0]
-    dx, dy = world.balls[0, BALL_X] - 0.2, world.balls[0, BALL_Y] - 0.3
+    dx, dy = world.balls[0, 0, BALL_X] - 0.2, world.balls[0, 0, BALL_Y] - 0.3
     return -math.sin(angle) * dx + math.cos(angle) * dy
 
 
@@ -216,7 +216,7 @@ def test_flipper_swings_to_its_stops_in_the_stroke_time():
     world.step(RELEASED)
     world.step(RELEASED)
     assert world.state.flipper_angle[0, 0] == rest
-    world.state.active[0] = False  # flippers move whether or not a ball is in play
+    world.state.active[0, 0] = False  # flippers move whether or not a ball is in play
     world.step(LEFT_UP)
     assert world.state.flipper_angle[0, 0] > rest
 
@@ -252,7 +252,7 @@ def test_fast_ball_meets_the_swinging_flipper_and_never_passes_through(speed, su
         world.step(LEFT_UP)
         hit = hit or any(c.name == "left" for c in world.frame_contacts())
     assert hit
-    assert world.balls[0, BALL_Y] > 0.3 and world.balls[0, BALL_VY] > 0  # back up, not through
+    assert world.balls[0, 0, BALL_Y] > 0.3 and world.balls[0, 0, BALL_VY] > 0  # back up, not through
 
 
 def test_swinging_face_launches_a_resting_ball_by_the_relative_velocity_rule():
@@ -269,7 +269,7 @@ def test_swinging_face_launches_a_resting_ball_by_the_relative_velocity_rule():
     world.step(LEFT_UP)
     hits = [c for c in world.frame_contacts() if c.name == "left"]
     assert len(hits) == 1
-    speed_after = math.hypot(world.balls[0, BALL_VX], world.balls[0, BALL_VY])
+    speed_after = math.hypot(world.balls[0, 0, BALL_VX], world.balls[0, 0, BALL_VY])
     assert speed_after == pytest.approx(1.8 * hits[0].speed, rel=1e-9)
     # The approach speed is the surface's normal speed: w times the lever arm of the contact.
     omega = math.radians(50) / 0.022
@@ -299,15 +299,15 @@ def cradled_world():
 def test_cradled_ball_stays_still_on_the_raised_flipper():
     world = cradled_world()
     flipper = CLASSIC.flippers[0]
-    held = world.balls[0, :2].copy()
+    held = world.balls[0, 0, :2].copy()
     for _ in range(240):
         world.step(LEFT_UP)
-        position = world.balls[0, :2]
+        position = world.balls[0, 0, :2]
         assert np.abs(position - held).max() < 2e-6  # no drift, no jitter beyond the skin
         gap = flipper_distance(*position, *flipper.pivot, flipper.length, flipper.base_radius,
                                flipper.tip_radius, world.state.flipper_angle[0, 0])[0]  # fmt: skip
         assert gap >= R - 1e-7  # no sinking
-        assert world.state.active[0]
+        assert world.state.active[0, 0]
 
 
 def test_released_cradle_rolls_down_the_flipper_past_the_tip():
@@ -317,7 +317,7 @@ def test_released_cradle_rolls_down_the_flipper_past_the_tip():
     xs = []
     for _ in range(240):
         world.step(RELEASED)
-        xs.append(world.balls[0, BALL_X])
+        xs.append(world.balls[0, 0, BALL_X])
     assert max(xs) > tip_x  # rolled down past the tip
 
 
@@ -327,14 +327,14 @@ def test_flip_under_a_cradled_ball_sends_it_to_the_upper_third():
     # Release, let the ball roll to the middle of the flipper, then a full flip.
     sweet_spot = flipper.pivot[0] + 0.04 * math.cos(math.radians(flipper.rest_angle))
     frames = 0
-    while world.balls[0, BALL_X] < sweet_spot and frames < 300:
+    while world.balls[0, 0, BALL_X] < sweet_spot and frames < 300:
         world.step(RELEASED)
         frames += 1
     assert frames < 300
     top = 0.0
     for _ in range(90):
         world.step(LEFT_UP)
-        top = max(top, world.balls[0, BALL_Y])
+        top = max(top, world.balls[0, 0, BALL_Y])
     assert top > 2 / 3 * CLASSIC.height
 
 
@@ -343,11 +343,11 @@ def test_ball_dropped_on_a_resting_flipper_rolls_off_into_the_drain():
     world.place_ball(0, (0.17, 0.16))
     for _ in range(600):
         world.step(RELEASED)
-        if not world.state.active[0]:
+        if not world.state.active[0, 0]:
             break
-    assert not world.state.active[0]
+    assert not world.state.active[0, 0]
     drain_y = CLASSIC.sensors[-1].points[0][1]
-    assert world.balls[0, BALL_Y] == pytest.approx(drain_y, abs=1e-9)
+    assert world.balls[0, 0, BALL_Y] == pytest.approx(drain_y, abs=1e-9)
 
 
 def test_flipper_stalls_against_a_ball_wedged_under_a_lid():
@@ -373,11 +373,11 @@ def test_flipper_stalls_against_a_ball_wedged_under_a_lid():
         world.step(LEFT_UP)
         angle = world.state.flipper_angle[0, 0]
         stalled += angle < up - math.radians(1)
-        assert world.balls[0, BALL_Y] <= lid - R + 1e-6  # never through the lid (skin scale)
-        gap = flipper_distance(*world.balls[0, :2], 0.2, 0.3, L, RB, RT, angle)[0]
+        assert world.balls[0, 0, BALL_Y] <= lid - R + 1e-6  # never through the lid (skin scale)
+        gap = flipper_distance(*world.balls[0, 0, :2], 0.2, 0.3, L, RB, RT, angle)[0]
         assert gap >= R - 1e-6  # nor through the flipper
         if angle < up - math.radians(1) and world.state.flipper_omega[0, 0] == 0.0:
-            assert world.balls[0, BALL_SPIN] == 0.0  # a pinched ball does not spin
+            assert world.balls[0, 0, BALL_SPIN] == 0.0  # a pinched ball does not spin
     assert stalled >= 1  # held back by the wedged ball for a while
     for _ in range(6):
         world.step(RELEASED)

@@ -49,7 +49,7 @@ def world_with(table, balls, pair=(1.0, 0.0), held=()):
 
 def state(world):
     """Env 0's balls, a copy."""
-    return world.multi.balls[0].copy()
+    return world.state.balls[0].copy()
 
 
 def contacts(world):
@@ -199,10 +199,10 @@ def test_random_balls_in_the_box_never_overlap_escape_or_blow_up(balls, first_he
     cap = BOX.simulation.substeps * BOX.simulation.max_passes * m
     for _ in range(600):
         assert step_multiball(world) == 0
-        assert world.mscratch.passes[0] <= cap
+        assert world.scratch.passes[0] <= cap
         b = state(world)
         assert np.isfinite(b).all()
-        assert world.multi.active[0].all()  # the box has no drain
+        assert world.state.active[0].all()  # the box has no drain
         assert min_distance(b, np.ones(m, bool)) >= 2 * R - SKIN - 1e-9
         assert (b[:, BALL_X] >= LEFT + R - SKIN).all() and (b[:, BALL_X] <= RIGHT - R + SKIN).all()
         assert (b[:, BALL_Y] >= FLOOR + R - SKIN).all() and (b[:, BALL_Y] <= TOP - R + SKIN).all()
@@ -245,7 +245,7 @@ def test_one_ball_follows_step_ball_bitwise():
     for _ in range(600):
         world.step()
         step_multiball(multi)
-        assert (state(multi)[0] == world.state.balls[0]).all()
+        assert (state(multi)[0] == world.state.balls[0, 0]).all()
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -265,12 +265,12 @@ def test_one_ball_on_classic_v1_under_random_flipping_is_step_ball_bitwise(seed)
         world.step(buttons)
         multi.state.flipper_command[0] = world.state.flipper_command[0]
         step_multiball(multi)
-        assert multi.multi.active[0, 0] == world.state.active[0]
+        assert multi.state.active[0, 0] == world.state.active[0, 0]
         assert (multi.state.hits == world.state.hits).all()
         assert (multi.state.flipper_angle == world.state.flipper_angle).all()
-        if not world.state.active[0]:
+        if not world.state.active[0, 0]:
             break
-        assert (state(multi)[0] == world.state.balls[0]).all()
+        assert (state(multi)[0] == world.state.balls[0, 0]).all()
 
 
 def test_two_balls_cradled_on_a_raised_flipper_rest_together():
@@ -281,7 +281,7 @@ def test_two_balls_cradled_on_a_raised_flipper_rest_together():
     for _ in range(600):
         step_multiball(world)
         b = state(world)
-        assert world.multi.active[0].all()
+        assert world.state.active[0].all()
         assert min_distance(b, np.ones(2, bool)) >= 2 * R - SKIN - 1e-9
     speeds = np.hypot(b[:, BALL_VX], b[:, BALL_VY])
     assert speeds.max() < 1e-2, (b, speeds)
@@ -344,7 +344,7 @@ for frame in range(240):
     if frame % 9 == 0:
         world.state.flipper_command[:] = rng.random(world.state.flipper_command.shape) < 0.5
     step_multiball(world)
-np.save(sys.argv[1], np.concatenate([world.multi.balls.ravel(), world.multi.active.ravel(),
+np.save(sys.argv[1], np.concatenate([world.state.balls.ravel(), world.state.active.ravel(),
                                      world.state.flipper_angle.ravel()]))
 """
 

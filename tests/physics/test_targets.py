@@ -118,7 +118,7 @@ def test_no_shot_passes_a_standing_drop_target(x, angle, speed):
             assert all(t >= end - 1e-12 for t in crossings)
             return
         assert not crossings
-        assert world.state.balls[0, 1] < LINE
+        assert world.state.balls[0, 0, 1] < LINE
 
 
 def test_a_bank_rises_after_its_reset_time_but_never_onto_the_ball():
@@ -159,7 +159,7 @@ def test_a_bank_rises_reset_time_after_its_last_target_fell():
     while world.state.targets_up[0, 1]:
         world.step()
         frames += 1
-    world.state.active[0] = False  # the ball out of the way
+    world.state.active[0, 0] = False  # the ball out of the way
     down = 0
     while not world.state.targets_up[0].all():
         world.step()
@@ -176,7 +176,7 @@ def test_a_standup_target_counts_every_hit_and_stays():
     for _ in range(240):
         world.step()
         total += world.state.hits[0, face]
-        assert world.state.balls[0, 1] < LINE
+        assert world.state.balls[0, 0, 1] < LINE
     assert total >= 2  # back and forth between the face and the bottom wall
 
 
@@ -192,10 +192,10 @@ def spin_down(speed: float, damping: float = 0.5, friction: float = 20.0) -> int
     spinner = world.table.element_names.index("spinner")
     world.place_ball(0, (0.255, LINE - 0.05), (0.0, speed))
     revolutions = 0
-    while world.state.balls[0, 1] < LINE:
+    while world.state.balls[0, 0, 1] < LINE:
         world.step()
         revolutions += world.state.hits[0, spinner]
-    world.state.active[0] = False  # it passes only once
+    world.state.active[0, 0] = False  # it passes only once
     for _ in range(60 * 60):
         world.step()
         revolutions += world.state.hits[0, spinner]
@@ -259,7 +259,7 @@ def test_a_lit_kickback_fires_the_ball_back_and_goes_dark():
             break
     assert fired
     assert not world.state.kickback_lit[0, 0]
-    ball = world.state.balls[0]
+    ball = world.state.balls[0, 0]
     assert ball[2] == 0.0 and ball[3] == 2.0  # at the kick velocity, exactly (no gravity)
     assert ball[1] >= LINE
     # Dark, the next ball over it goes through (and counts).
@@ -269,7 +269,7 @@ def test_a_lit_kickback_fires_the_ball_back_and_goes_dark():
         world.step()
         crossed += world.state.hits[0, kickback]
     assert crossed == 1
-    assert world.state.balls[0, 1] < LINE
+    assert world.state.balls[0, 0, 1] < LINE
 
 
 def test_a_kickback_ignores_a_ball_going_its_way():
@@ -278,4 +278,4 @@ def test_a_kickback_ignores_a_ball_going_its_way():
     for _ in range(10):
         world.step()
     assert world.state.kickback_lit[0, 0]
-    assert world.state.hits[0].sum() == 0 or world.state.balls[0, 1] > LINE
+    assert world.state.hits[0].sum() == 0 or world.state.balls[0, 0, 1] > LINE

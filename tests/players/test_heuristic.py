@@ -252,7 +252,7 @@ def outlane_crossed(nudging: bool, position: tuple, velocity: tuple, mirror: boo
     policy = HeuristicPolicy(V1, nudge=nudging)
     lane = V1.element_names.index("right_outlane" if mirror else "left_outlane")
     for frame in range(120):
-        info = {"ball_position": world.balls[0, :2], "ball_velocity": world.balls[0, 2:4],
+        info = {"ball_position": world.balls[0, 0, :2], "ball_velocity": world.balls[0, 0, 2:4],
                 "frames": frame, "tilt_warnings": 0, "tilted": False,
                 "ball_on_plunger": False, "plunger_pull": 0.0}  # fmt: skip
         action = policy(info)

@@ -160,7 +160,7 @@ def _roll_frame_by_frame(table, starts, lane_x):
         world.place_ball(env, position, velocity)
     flippers = first_flipper(world.geometry) + np.arange(len(table.flippers))
     entered, touched = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
-    anchor = world.balls[:, [BALL_X, BALL_Y]].copy()
+    anchor = world.balls[:, 0, [BALL_X, BALL_Y]].copy()
     still = np.zeros(n, dtype=np.int64)
     frame_rate = table.simulation.frame_rate
     for _ in range(round(checks.DRAIN_TIME * frame_rate)):
@@ -168,7 +168,7 @@ def _roll_frame_by_frame(table, starts, lane_x):
         active = world.active
         if not active.any():
             break
-        position = world.balls[:, [BALL_X, BALL_Y]]
+        position = world.balls[:, 0, [BALL_X, BALL_Y]]
         entered |= active & (position[:, 0] < lane_x - radius)
         for env in np.flatnonzero(active):
             ids = world.state.contacts[env, : world.state.contact_count[env], CONTACT_ELEMENT]
@@ -307,7 +307,7 @@ def test_a_world_of_different_tables_steps_each_env_as_its_own_world():
     rng = np.random.default_rng(0)
     for frame in range(1200):
         for env, single in enumerate(singles):
-            if not single.active[0]:  # relaunch drained balls, the same in both
+            if not single.active[0, 0]:  # relaunch drained balls, the same in both
                 speed = rng.uniform(*tables[env].plunger.speed)
                 single.launch(0, speed)
                 world.launch(env, speed)
@@ -316,7 +316,7 @@ def test_a_world_of_different_tables_steps_each_env_as_its_own_world():
         points = world.frame_points()
         for env, single in enumerate(singles):
             single.step(buttons[env : env + 1])
-            assert np.array_equal(single.balls[0], world.balls[env]), (frame, env)
+            assert np.array_equal(single.balls[0, 0], world.balls[env, 0]), (frame, env)
             assert np.array_equal(single.state.flipper_angle[0], world.state.flipper_angle[env])
             assert single.frame_points()[0] == points[env]
             assert single.frame_contacts(0) == world.frame_contacts(env)

@@ -16,8 +16,8 @@ def assert_sound(world: World) -> None:
     r, skin = table.ball.radius, table.simulation.skin
     assert np.isfinite(state.balls).all()
     outline = table.outline
-    for env in np.flatnonzero(state.active):
-        x, y = state.balls[env, :2]
+    for env, ball in np.argwhere(state.active):
+        x, y = state.balls[env, ball, :2]
         if outline is not None:
             assert inside((x, y), outline.points), (env, x, y)
         for wall in table.walls:

@@ -38,7 +38,7 @@ def test_pop_bumper_scores_once_per_hit_and_kicks():
     assert world.state.hits[0, bumper_id] == 1
     assert world.frame_points()[0] == 100
     # The kick sends the ball back up faster than restitution alone would (0.9 x ~1.1 m/s).
-    assert world.balls[0, BALL_VY] > 0.9 * 1.2 + 1.0
+    assert world.balls[0, 0, BALL_VY] > 0.9 * 1.2 + 1.0
     # Over a longer run: one hit per logged contact with the bumper, never two, never none.
     hits = contacts = 0
     for _ in range(600):
@@ -87,12 +87,12 @@ def test_drain_takes_the_ball_out_of_play_where_it_crosses():
     world = World(CLASSIC)
     drain = element_id(world, "drain")
     world.place_ball(0, (0.2365, 0.08), (0.0, -1.0))  # between the flippers, heading down
-    assert run_until(world, lambda w: not w.state.active[0], frames=30)
+    assert run_until(world, lambda w: not w.state.active[0, 0], frames=30)
     assert world.state.hits[0, drain] == 1
-    assert world.balls[0, BALL_Y] == pytest.approx(CLASSIC.sensors[-1].points[0][1], abs=1e-12)
-    frozen = world.balls[0].copy()
+    assert world.balls[0, 0, BALL_Y] == pytest.approx(CLASSIC.sensors[-1].points[0][1], abs=1e-12)
+    frozen = world.balls[0, 0].copy()
     world.step(NONE)
-    np.testing.assert_array_equal(world.balls[0], frozen)
+    np.testing.assert_array_equal(world.balls[0, 0], frozen)
     assert world.state.hits[0, drain] == 0
 
 
@@ -161,7 +161,7 @@ def test_random_games_keep_the_ball_on_the_table():
     for _ in range(frames):
         flip = rng.random((n_envs, 2)) < 0.08  # toggle buttons now and then: holds and flips
         buttons ^= flip
-        before = world.balls[:, [BALL_X, BALL_Y]].copy()
+        before = world.balls[:, 0, [BALL_X, BALL_Y]].copy()
         world.step(buttons)
         balls = world.balls
         assert np.all(np.isfinite(balls))
@@ -206,7 +206,7 @@ def test_crossings_before_a_drain_count_whatever_the_listing_order(physics, drai
     for _ in range(5):
         world.step()
         total += int(world.frame_points()[0])
-    assert total == 10 and not world.state.active[0]
+    assert total == 10 and not world.state.active[0, 0]
 
 
 def test_sensors_meeting_end_to_end_count_a_crossing_at_the_joint_once():

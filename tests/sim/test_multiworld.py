@@ -56,13 +56,13 @@ def frames_until(world, condition, limit):
     return None
 
 
-def test_one_ball_tables_keep_the_one_ball_kernel_and_its_arrays():
+def test_one_ball_tables_keep_the_one_ball_kernel_in_one_slot():
     world = World(load_table("classic_v1"), 2)
-    assert world.n_balls == 1 and world.multi is None
-    assert world.ball_states.shape == (2, 1, 5)
-    assert np.shares_memory(world.ball_states, world.balls)
+    assert world.n_balls == 1 and not world.several and world.swept_kernel
+    assert world.balls.shape == (2, 1, 5) and world.active.shape == world.held.shape == (2, 1)
+    assert world.balls is world.state.balls and world.active is world.state.active
     world.place_ball(1, (0.3, 0.5), (0.1, 0.2))
-    assert world.ball_states[1, 0, BALL_X] == 0.3 and world.ball_active[1, 0]
+    assert world.balls[1, 0, BALL_X] == 0.3 and world.active[1, 0]
     with pytest.raises(ValueError, match="ball must be"):
         world.place_ball(0, (0.3, 0.5), ball=1)
     with pytest.raises(ValueError, match="nothing holds"):
@@ -72,12 +72,9 @@ def test_one_ball_tables_keep_the_one_ball_kernel_and_its_arrays():
 def test_several_balls_step_as_the_multiball_kernel_bitwise():
     table = table_from_dict(multiball_dict(), "<multiball>")
     world = World(table, 2)
-    assert world.n_balls == 3 and world.ball_states.shape == (2, 3, 5)
-    assert world.ball_active.tolist() == [[True, False, False]] * 2
-    with pytest.raises(AttributeError, match="ball_states"):
-        world.balls  # noqa: B018
-    with pytest.raises(AttributeError, match="ball_active"):
-        world.active  # noqa: B018
+    assert world.n_balls == 3 and world.balls.shape == (2, 3, 5)
+    assert world.active.tolist() == [[True, False, False]] * 2
+    assert world.several and not world.swept_kernel
     reference = make_multiball(table, 2, 3)
     threaded = World(table, 2, num_threads=2)  # bitwise the same on any number of threads
     starts = [((0.25, 0.6), (0.5, 1.0)), ((0.3, 0.7), (-0.4, 0.2)), ((0.2, 0.8), (0.0, -1.0))]
@@ -91,11 +88,11 @@ def test_several_balls_step_as_the_multiball_kernel_bitwise():
         buttons = rng.random((2, 2)) < 0.3
         world.step(buttons)
         threaded.step(buttons)
-        np.testing.assert_array_equal(threaded.ball_states, world.ball_states)
+        np.testing.assert_array_equal(threaded.balls, world.balls)
         reference.state.flipper_command[:] = buttons[:, table.flipper_buttons]
         step_multiball(reference)
-        np.testing.assert_array_equal(world.ball_states, reference.multi.balls)
-        np.testing.assert_array_equal(world.ball_active, reference.multi.active)
+        np.testing.assert_array_equal(world.balls, reference.state.balls)
+        np.testing.assert_array_equal(world.active, reference.state.active)
         np.testing.assert_array_equal(world.state.flipper_angle, reference.state.flipper_angle)
 
 
@@ -103,9 +100,9 @@ def test_launch_takes_a_ball_index():
     table = table_from_dict(multiball_dict(), "<multiball>")
     world = World(table, 1)
     world.launch(0, 2.5, ball=2)
-    assert world.ball_active[0].tolist() == [True, False, True]
-    assert tuple(world.ball_states[0, 2, [BALL_X, BALL_Y]]) == table.plunger.position
-    assert world.ball_states[0, 2, BALL_VY] == 2.5
+    assert world.active[0].tolist() == [True, False, True]
+    assert tuple(world.balls[0, 2, [BALL_X, BALL_Y]]) == table.plunger.position
+    assert world.balls[0, 2, BALL_VY] == 2.5
 
 
 def test_a_held_ball_stays_and_is_released_at_its_velocity():
@@ -113,33 +110,33 @@ def test_a_held_ball_stays_and_is_released_at_its_velocity():
     world.hold_ball(0, 1, (0.3, 0.3))
     for _ in range(10):
         world.step()
-    assert world.ball_held[0, 1]
-    assert world.ball_states[0, 1, :4].tolist() == [0.3, 0.3, 0.0, 0.0]
+    assert world.held[0, 1]
+    assert world.balls[0, 1, :4].tolist() == [0.3, 0.3, 0.0, 0.0]
     world.release_ball(0, 1, (0.2, 0.0))
     world.step()
-    assert not world.ball_held[0, 1]
-    assert world.ball_states[0, 1, BALL_X] == pytest.approx(0.3 + 0.2 * DT)
+    assert not world.held[0, 1]
+    assert world.balls[0, 1, BALL_X] == pytest.approx(0.3 + 0.2 * DT)
 
 
 def test_a_saucer_captures_scores_holds_and_kicks_out():
     world = World(level_box(), 1)
     world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
-    frames = frames_until(world, lambda: world.ball_held[0, 0], 60)
+    frames = frames_until(world, lambda: world.held[0, 0], 60)
     # Captured on the first frame that ends within the radius: 0.18 m at 0.3 m/s.
     assert frames == math.ceil(0.18 / 0.3 / DT)
-    assert world.ball_states[0, 0, :4].tolist() == [0.255, 0.50, 0.0, 0.0]
+    assert world.balls[0, 0, :4].tolist() == [0.255, 0.50, 0.0, 0.0]
     assert world.frame_points()[0] == 500
     assert [c.name for c in world.frame_contacts(0)] == ["saucer"]
-    held = frames_until(world, lambda: not world.ball_held[0, 0], 100)
+    held = frames_until(world, lambda: not world.held[0, 0], 100)
     assert held == round(0.5 / DT)  # hold_time
-    assert world.ball_states[0, 0, [BALL_VX, BALL_VY]].tolist() == [1.0, 0.5]  # the kick
+    assert world.balls[0, 0, [BALL_VX, BALL_VY]].tolist() == [1.0, 0.5]  # the kick
     assert world.frame_points()[0] == 0
     for _ in range(10):  # it leaves along the kick, not captured again on its way out
         world.step()
-        assert not world.ball_held[0, 0]
-    x, y = world.ball_states[0, 0, [BALL_X, BALL_Y]]
+        assert not world.held[0, 0]
+    x, y = world.balls[0, 0, [BALL_X, BALL_Y]]
     assert math.atan2(y - 0.5, x - 0.255) == pytest.approx(math.atan2(0.5, 1.0))
-    assert math.hypot(*world.ball_states[0, 0, [BALL_VX, BALL_VY]]) == pytest.approx(
+    assert math.hypot(*world.balls[0, 0, [BALL_VX, BALL_VY]]) == pytest.approx(
         math.hypot(1.0, 0.5)
     )
 
@@ -149,8 +146,8 @@ def test_a_fast_ball_passes_over_a_saucer():
     world.place_ball(0, (0.255, 0.30), (0.0, 1.0))
     for _ in range(30):
         world.step()
-        assert not world.ball_held[0, 0] and world.frame_points()[0] == 0
-    assert world.ball_states[0, 0, BALL_Y] > 0.6
+        assert not world.held[0, 0] and world.frame_points()[0] == 0
+    assert world.balls[0, 0, BALL_Y] > 0.6
 
 
 def test_a_held_saucer_takes_no_second_ball_and_is_a_post_to_it():
@@ -160,8 +157,8 @@ def test_a_held_saucer_takes_no_second_ball_and_is_a_post_to_it():
     world.place_ball(0, (0.255, 0.30), (0.0, 0.3), ball=1)
     for _ in range(60):
         world.step()
-        assert not world.ball_held[0, 1]
-    assert world.ball_states[0, 1, BALL_VY] < 0.0  # it bounced off the held ball
+        assert not world.held[0, 1]
+    assert world.balls[0, 1, BALL_VY] < 0.0  # it bounced off the held ball
 
 
 def test_a_lock_fills_its_slots_in_order_and_releases_them():
@@ -171,38 +168,37 @@ def test_a_lock_fills_its_slots_in_order_and_releases_them():
     world.place_ball(0, (0.30, 0.84), (-0.5, 0.0), ball=1)
     for _ in range(30):
         world.step()
-        assert not world.ball_held[0, 1]
+        assert not world.held[0, 1]
     world.place_ball(0, (0.10, 0.60), (0.0, 0.5), ball=0)
-    assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
-    assert world.ball_states[0, 0, :4].tolist() == [0.10, 0.80, 0.0, 0.0]
+    assert frames_until(world, lambda: world.held[0, 0], 60) is not None
+    assert world.balls[0, 0, :4].tolist() == [0.10, 0.80, 0.0, 0.0]
     assert world.frame_points()[0] == 1000 and world.slot[0, 0] == 0
     world.place_ball(0, (0.30, 0.84), (-0.5, 0.0), ball=1)
-    assert frames_until(world, lambda: world.ball_held[0, 1], 60) is not None
-    assert world.ball_states[0, 1, :4].tolist() == [0.10, 0.84, 0.0, 0.0]
+    assert frames_until(world, lambda: world.held[0, 1], 60) is not None
+    assert world.balls[0, 1, :4].tolist() == [0.10, 0.84, 0.0, 0.0]
     assert world.slot[0, 1] == 1 and (world.holder[0, :2] == lock).all()
     for _ in range(120):  # a lock holds until a rule releases it
         world.step()
-    assert world.ball_held[0, :2].all()
+    assert world.held[0, :2].all()
     assert world.release_lock(0, 0) == 2
-    assert not world.ball_held[0].any()
+    assert not world.held[0].any()
     for _ in range(5):
         world.step()
-        assert not world.ball_held[0].any()
-    assert world.ball_states[0, :2, BALL_VX].tolist() == [0.5, 0.5]
-    assert world.ball_states[0, :2, BALL_VY].tolist() == [-0.5, -0.5]
+        assert not world.held[0].any()
+    assert world.balls[0, :2, BALL_VX].tolist() == [0.5, 0.5]
+    assert world.balls[0, :2, BALL_VY].tolist() == [-0.5, -0.5]
 
 
-def test_one_ball_with_a_saucer_aliases_the_one_ball_arrays():
+def test_one_ball_with_a_saucer_takes_the_several_ball_kernel_in_one_slot():
     world = World(level_box(balls=1), 1)
-    assert world.n_balls == 1 and world.multi is not None
+    assert world.n_balls == 1 and world.several
     assert not world.swept_kernel  # the game hands its frames to world.step
-    assert World(load_table("classic_v1")).swept_kernel
-    assert np.shares_memory(world.state.balls, world.multi.balls)
     world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
-    assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
-    assert world.balls[0, :2].tolist() == [0.255, 0.50] and world.active[0]
+    assert frames_until(world, lambda: world.held[0, 0], 60) is not None
+    assert world.balls[0, 0, :2].tolist() == [0.255, 0.50] and world.active[0, 0]
     copy_ = pickle.loads(pickle.dumps(world))
-    assert np.shares_memory(copy_.state.balls, copy_.multi.balls)
+    assert copy_.balls is copy_.state.balls
+    np.testing.assert_array_equal(copy_.balls, world.balls)
 
 
 def test_several_balls_on_the_multiball_table_never_overlap_or_escape():
@@ -217,7 +213,7 @@ def test_several_balls_on_the_multiball_table_never_overlap_or_escape():
     for _ in range(600):
         world.step(rng.random((2, 2)) < 0.2)
         for env in range(2):
-            live = world.ball_states[env, world.ball_active[env]][:, :2]
+            live = world.balls[env, world.active[env]][:, :2]
             for i in range(len(live)):
                 for j in range(i + 1, len(live)):
                     assert math.dist(live[i], live[j]) >= 2 * r - 2 * table.simulation.skin
@@ -232,7 +228,7 @@ def test_pymunk_plays_several_balls_with_the_same_api():
 
     table = table_from_dict(multiball_dict(), "<multiball>")
     world = make_world(table, 1, physics="pymunk")
-    assert world.n_balls == 3 and world.ball_states.shape == (1, 3, 5)
+    assert world.n_balls == 3 and world.balls.shape == (1, 3, 5)
     world.launch(0, 2.8, ball=0)
     world.place_ball(0, (0.25, 0.7), (0.3, -0.5), ball=1)
     world.place_ball(0, (0.3, 0.8), (-0.2, 0.1), ball=2)
@@ -240,11 +236,11 @@ def test_pymunk_plays_several_balls_with_the_same_api():
     rng = np.random.default_rng(2)
     for _ in range(300):
         world.step(rng.random((1, 2)) < 0.2)
-        live = world.ball_states[0, world.ball_active[0]][:, :2]
+        live = world.balls[0, world.active[0]][:, :2]
         for i in range(len(live)):
             for j in range(i + 1, len(live)):
                 assert math.dist(live[i], live[j]) >= 2 * r - 1e-3  # pymunk's slop and more
-        assert np.isfinite(world.ball_states).all()
+        assert np.isfinite(world.balls).all()
 
 
 def test_pymunk_saucer_and_held_balls():
@@ -252,14 +248,14 @@ def test_pymunk_saucer_and_held_balls():
 
     world = make_world(level_box(saucers=({**SAUCER, "hold_time": 3.0},)), 1, physics="pymunk")
     world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
-    assert frames_until(world, lambda: world.ball_held[0, 0], 60) is not None
+    assert frames_until(world, lambda: world.held[0, 0], 60) is not None
     assert world.frame_points()[0] == 500
     world.place_ball(0, (0.255, 0.20), (0.0, 0.3), ball=1)
     for _ in range(60):  # the second ball bounces off the held one, which does not move
         world.step()
-        assert world.ball_states[0, 0, :4].tolist() == [0.255, 0.50, 0.0, 0.0]
-        assert not world.ball_held[0, 1]
-    assert world.ball_states[0, 1, BALL_VY] < 0.0
+        assert world.balls[0, 0, :4].tolist() == [0.255, 0.50, 0.0, 0.0]
+        assert not world.held[0, 1]
+    assert world.balls[0, 1, BALL_VY] < 0.0
     world.release_ball(0, 0, (0.0, 1.0))
     world.step()
-    assert world.ball_states[0, 0, BALL_Y] == pytest.approx(0.5 + DT, rel=1e-6)
+    assert world.balls[0, 0, BALL_Y] == pytest.approx(0.5 + DT, rel=1e-6)

@@ -64,7 +64,7 @@ def make_world(
 
 
 def ball(world, env=0):
-    return world.balls[env].copy()
+    return world.balls[env, 0].copy()
 
 
 def g_table(slope_deg=6.5):
@@ -198,7 +198,7 @@ def test_kick_adds_speed_along_the_normal():
 
 def test_inactive_ball_is_left_untouched():
     world = make_world([BOX], n_envs=2)
-    world.active[1] = False
+    world.active[1, 0] = False
     before = ball(world, 1)
     world.trace(10)
     np.testing.assert_array_equal(ball(world, 1), before)
@@ -228,7 +228,7 @@ def test_batch_of_balls_matches_single_balls():
     batch.trace(120)
     for env, single in enumerate(singles):
         single.trace(120)
-        np.testing.assert_array_equal(batch.balls[env], single.balls[0])
+        np.testing.assert_array_equal(batch.balls[env, 0], single.balls[0, 0])
 
 
 # --- properties -------------------------------------------------------------------------------
@@ -394,8 +394,8 @@ def test_ball_partly_through_a_gate_next_to_a_wall_goes_back_instead_of_into_the
     world.place_ball(0, (0.1, 0.5), (-1.0, 0.0))
     for _ in range(60):
         world.step()
-        assert world.balls[0, BALL_X] >= 0.01 + RADIUS - SKIN
-    assert world.balls[0, BALL_VX] > 0.0 and world.balls[0, BALL_X] > 0.03 + RADIUS
+        assert world.balls[0, 0, BALL_X] >= 0.01 + RADIUS - SKIN
+    assert world.balls[0, 0, BALL_VX] > 0.0 and world.balls[0, 0, BALL_X] > 0.03 + RADIUS
 
 
 def crowded_classic():

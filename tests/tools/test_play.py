@@ -486,7 +486,7 @@ def test_the_plunger_keys_pull_the_plunger_and_fire_the_ball(cabinet_loop):
     assert cabinet_loop.actions == [4] * 30
     assert game.state.on_plunger[0] and game.state.plunger_pull[0] > 0.0
     cabinet_loop.run(scripted({0: [up(pygame.K_DOWN)]}), max_frames=2)
-    assert not game.state.on_plunger[0] and game.world.state.active[0]
+    assert not game.state.on_plunger[0] and game.world.state.active[0, 0]
     assert (
         cabinet_loop.info["ball_position"][1] > cabinet_loop.env.unwrapped.table.plunger.position[1]
     )

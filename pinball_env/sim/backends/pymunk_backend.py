@@ -34,7 +34,7 @@ Several balls (a table whose trough holds several, see ``World.n_balls``): each 
 dynamic circle of its own, and pymunk collides the balls itself (it finds their overlaps after
 they happen, as with every other contact), at the ball-ball material's restitution and friction
 (``table.pack_ball_pair``: set on each ball-ball arbiter, since pymunk would multiply the balls'
-own values); a held ball (``World.ball_held``: a saucer, a lock) is a kinematic body at rest,
+own values); a held ball (``World.held``: a saucer, a lock) is a kinematic body at rest,
 immovable to the others, and dynamic again when released. The sensors, kickbacks and the drain
 are crossed by each ball's own move; banks rise when no ball in play is near them. The saucers
 and locks themselves are ``World``'s (the end of each frame, either backend).
@@ -104,7 +104,7 @@ class PymunkWorld(World):
         for env, env_space in enumerate(self._spaces):
             if envs is None or envs[env]:
                 env_space.advance_frame()
-        return int((~np.isfinite(self.ball_states).all(axis=(1, 2))).sum())
+        return int((~np.isfinite(self.state.balls).all(axis=(1, 2))).sum())
 
     def __getstate__(self) -> dict[str, Any]:
         # Spaces hold callbacks into this object; they are rebuilt from the state arrays.
@@ -290,12 +290,8 @@ class _EnvSpace:
                     self._cross_sensors(i, before[i])
         self._sync_ball_out()
         if world.table.has_targets:
-            if world.n_balls == 1:
-                balls, active = state.balls[env : env + 1], state.active[env : env + 1]
-            else:
-                balls, active = world.ball_states[env], world.ball_active[env]
-            update_targets(geometry, state, env, balls, active, world.table.ball.radius,
-                           settings.dt)  # fmt: skip
+            update_targets(geometry, state, env, state.balls[env], state.active[env],
+                           world.table.ball.radius, settings.dt)  # fmt: skip
 
     def _cross_sensors(self, i: int, before: "pymunk.Vec2d") -> None:
         """The kernel's sensor bookkeeping on ball ``i``'s move over the substep just stepped;
@@ -345,14 +341,14 @@ class _EnvSpace:
         )  # fmt: skip
         if drain < math.inf:
             body.position = (before.x + drain * dx, before.y + drain * dy)
-            world.ball_active[env, i] = False
+            world.active[env, i] = False
             self._remove_ball(i)
 
     def _sync_ball_in(self) -> None:
         """Write the state arrays into the ball bodies (they may have been set from outside):
         a ball out of play leaves the space, a held one is a kinematic body at rest."""
         world, env = self.world, self.env
-        states, active, held = world.ball_states[env], world.ball_active[env], world.ball_held[env]
+        states, active, held = world.balls[env], world.active[env], world.held[env]
         for i, body in enumerate(self.balls):
             if not active[i]:
                 self._remove_ball(i)
@@ -373,9 +369,9 @@ class _EnvSpace:
     def _sync_ball_out(self) -> None:
         world, env = self.world, self.env
         for i, body in enumerate(self.balls):
-            if world.ball_held[env, i]:
+            if world.held[env, i]:
                 continue  # exactly where it is held
-            ball = world.ball_states[env, i]
+            ball = world.balls[env, i]
             ball[BALL_X], ball[BALL_Y] = body.position
             ball[BALL_VX], ball[BALL_VY] = body.velocity
             ball[BALL_SPIN] = body.angular_velocity

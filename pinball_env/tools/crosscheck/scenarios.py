@@ -166,12 +166,12 @@ def shoot(
     path = []
     for frame in range(frames):
         world.step(buttons)
-        path.append(world.balls[0, [BALL_X, BALL_Y]].copy())
+        path.append(world.balls[0, 0, [BALL_X, BALL_Y]].copy())
         contacts = [c for c in world.frame_contacts() if c.speed > 0.0]
         if contacts and contact_time is None:
             late = SUBSTEP if type(world).__name__ == "PymunkWorld" else 0.0
             contact_time = frame / FRAME_RATE + contacts[0].time + late
-    ball = world.balls[0]
+    ball = world.balls[0, 0]
     return Shot(contact_time, ball[[BALL_VX, BALL_VY]].copy(), ball[[BALL_X, BALL_Y]].copy(), path)
 
 
@@ -300,7 +300,7 @@ def flipper_drop(heights: list[float]) -> list:
             frames = int(shots[engine].contact_time * FRAME_RATE) + 1
             for _ in range(frames):
                 world.step()
-            shots[engine].velocity = world.balls[0, [BALL_VX, BALL_VY]].copy()
+            shots[engine].velocity = world.balls[0, 0, [BALL_VX, BALL_VY]].copy()
         swept, pym = shots["swept"], shots["pymunk"]
         speed = lambda shot: float(np.linalg.norm(shot.velocity))  # noqa: E731
         rows.append(
@@ -461,7 +461,7 @@ def nudge_free_flight(frames: int = 20) -> list:
                 world.step()
                 contacts += int(world.state.contact_count[0])
                 time = (frame + 1) / FRAME_RATE
-                ball.append(world.balls[0, [BALL_VX, BALL_VY]] - velocity - gravity * time)
+                ball.append(world.balls[0, 0, [BALL_VX, BALL_VY]] - velocity - gravity * time)
                 cabinet.append(world.state.cabinet[0, [CABINET_VX, CABINET_VY]].copy())
             # The cabinet starts at rest: its velocity is its velocity change.
             error = np.abs(np.array(ball) + np.array(cabinet)).max()
@@ -490,7 +490,7 @@ def _resting(world: World) -> np.ndarray | None:
 def _rolling(world: World) -> np.ndarray | None:
     """A ball rolling along the floor at 0.5 m/s, no buttons held."""
     world.place_ball(0, (0.3, 0.3 + RADIUS), (0.5, 0.0))
-    world.balls[0, BALL_SPIN] = -0.5 / RADIUS  # rolling: no slip at the contact point
+    world.balls[0, 0, BALL_SPIN] = -0.5 / RADIUS  # rolling: no slip at the contact point
     return None
 
 
@@ -536,10 +536,10 @@ def nudge_contact() -> list:
                 buttons = setup(world)
                 for _ in range(settle):
                     world.step(buttons)
-                before[engine] = world.balls[0, [BALL_VX, BALL_VY]].copy()
+                before[engine] = world.balls[0, 0, [BALL_VX, BALL_VY]].copy()
                 nudge(world, direction, impulse)
                 world.step(buttons)
-                after[engine] = world.balls[0, [BALL_VX, BALL_VY]].copy()
+                after[engine] = world.balls[0, 0, [BALL_VX, BALL_VY]].copy()
             difference = float(np.linalg.norm(after["swept"] - after["pymunk"]))
             settled = float(np.linalg.norm(before["swept"] - before["pymunk"]))
             row: dict[str, Any] = {
@@ -607,7 +607,7 @@ def plunger_launches(pulls: list[float]) -> list:
                 world.step()
                 contacts += int(world.state.contact_count[0])
                 times.append(len(times) / FRAME_RATE)
-                heights.append(float(world.balls[0, BALL_Y]))
+                heights.append(float(world.balls[0, 0, BALL_Y]))
             a, b, c = np.polyfit(times[-3:], heights[-3:], 2)
             if crosses:
                 roots = np.roots([a, b, c - gate_y]).real
@@ -688,8 +688,8 @@ def spinner_turns(speeds: list[float], seconds: float = 8.0) -> list:
             for _ in range(int(seconds * FRAME_RATE)):
                 world.step()
                 turns += int(world.state.hits[0, spinner])
-                if world.active[0] and world.balls[0, BALL_Y] > 0.65:
-                    world.state.active[0] = False  # once through is enough
+                if world.active[0, 0] and world.balls[0, 0, BALL_Y] > 0.65:
+                    world.state.active[0, 0] = False  # once through is enough
             row[engine] = turns
         rows.append(row)
     return rows
@@ -770,7 +770,7 @@ def ball_ball_hits(
                         world.place_ball(0, tuple(start), tuple(velocity), ball=ball)
                     for _ in range(frames):
                         world.step()
-                    after = world.ball_states[0, :2]
+                    after = world.balls[0, :2]
                     velocities = after[:, [BALL_VX, BALL_VY]]
                     gap = float((after[1, [BALL_X, BALL_Y]] - after[0, [BALL_X, BALL_Y]]) @ normal)
                     separating = float((velocities[1] - velocities[0]) @ normal)
@@ -839,11 +839,11 @@ def two_balls_cradled(seconds: float = 4.0) -> dict[str, Any]:
         least = math.inf
         for _ in range(int(seconds * FRAME_RATE)):
             world.step(LEFT_BUTTON)
-            centres = world.ball_states[0, :2][:, [BALL_X, BALL_Y]]
+            centres = world.balls[0, :2][:, [BALL_X, BALL_Y]]
             least = min(least, float(np.linalg.norm(centres[1] - centres[0])))
-        balls = world.ball_states[0, :2]
+        balls = world.balls[0, :2]
         result[engine] = {
-            "in_play": world.ball_active[0, :2].tolist(),
+            "in_play": world.active[0, :2].tolist(),
             "positions": balls[:, [BALL_X, BALL_Y]].tolist(),
             "speeds": np.hypot(balls[:, BALL_VX], balls[:, BALL_VY]).tolist(),
             "gap": float(np.linalg.norm(balls[1, [BALL_X, BALL_Y]] - balls[0, [BALL_X, BALL_Y]]))

@@ -149,9 +149,9 @@ def frame_state(env: PinballEnv, over: bool = False) -> dict[str, Any]:
     game = env.game
     world = game.world
     table = world.table_of(0)
-    balls = [world.state.balls[0, :2]]
+    balls = [game.state.game_ball[0, :2]]
     if game.multi is not None:  # every ball on the table, as the frame draws them
-        balls += list(world.ball_states[0, world.ball_active[0], :2])
+        balls += list(world.balls[0, world.active[0], :2])
     info = game.info(0)
     state: dict[str, Any] = {
         "frame": int(info["frames"]),
