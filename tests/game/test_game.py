@@ -173,7 +173,7 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
         frames = np.zeros(n, dtype=np.int64)
         for frame in range(k + MAX_RUN_ON_FRAMES):
             high = framing.world.balls[:, 0, 1] > line * CLASSIC.height
-            going = ~ended & ((frame < k) | (high & framing.world.active))
+            going = ~ended & ((frame < k) | (high & framing.world.active[:, 0]))
             if not going.any():
                 break
             actions = np.where(frame < k, step_actions, 0)
@@ -186,7 +186,7 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
         assert observed[0] == observed[1]
         assert (skipping.state.frames == framing.state.frames).all()
         high = skipping.world.balls[:, 0, 1] > line * CLASSIC.height
-        asked_high = high & skipping.world.active & ~over
+        asked_high = high & skipping.world.active[:, 0] & ~over
         assert (frames[asked_high] == k + MAX_RUN_ON_FRAMES).all()  # only after the most
         high_asks += int(asked_high.sum())
         lengths += int(frames.sum())

@@ -165,7 +165,7 @@ def _roll_frame_by_frame(table, starts, lane_x):
     frame_rate = table.simulation.frame_rate
     for _ in range(round(checks.DRAIN_TIME * frame_rate)):
         world.step()
-        active = world.active
+        active = world.active[:, 0]
         if not active.any():
             break
         position = world.balls[:, 0, [BALL_X, BALL_Y]]

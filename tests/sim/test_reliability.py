@@ -215,7 +215,7 @@ def test_a_ball_pinched_against_a_wall_stays_out_of_it_and_stops_spinning():
     for _ in range(60):
         world.step(np.array([[True, False]]))
         assert_sound(world)
-        ball = world.balls[0]
+        ball = world.balls[0, 0]
         if ball[BALL_VX] == ball[BALL_VY] == 0.0:
             pinched += 1
             assert ball[BALL_SPIN] == 0.0

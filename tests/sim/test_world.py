@@ -415,8 +415,8 @@ def sweep_everything(world: World) -> None:
     for good (``physics.near``), as the kernel was before it had candidate sets."""
     scratch = world.scratch
     for env in range(world.n_envs):
-        gather_near(0.0, 0.0, math.inf, world.tables.geometry_of(env), scratch.near[env],
-                    scratch.near_ends[env], scratch.near_zone[env])  # fmt: skip
+        gather_near(0.0, 0.0, math.inf, world.tables.geometry_of(env), scratch.near[env, 0],
+                    scratch.near_ends[env, 0], scratch.near_zone[env, 0])  # fmt: skip
 
 
 def traces(table, n_frames: int, place) -> list:

@@ -113,7 +113,7 @@ class PymunkWorld(World):
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        super().__setstate__(state)
+        self.__dict__.update(state)
         self._spaces = [_EnvSpace(self, env) for env in range(self.n_envs)]
 
 
