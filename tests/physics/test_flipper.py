@@ -252,7 +252,7 @@ def test_fast_ball_meets_the_swinging_flipper_and_never_passes_through(speed, su
         world.step(LEFT_UP)
         hit = hit or any(c.name == "left" for c in world.frame_contacts())
     assert hit
-    assert world.balls[0, 0, BALL_Y] > 0.3 and world.balls[0, 0, BALL_VY] > 0  # back up, not through
+    assert world.balls[0, 0, BALL_Y] > 0.3 and world.balls[0, 0, BALL_VY] > 0  # back up, not in
 
 
 def test_swinging_face_launches_a_resting_ball_by_the_relative_velocity_rule():

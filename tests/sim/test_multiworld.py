@@ -136,9 +136,7 @@ def test_a_saucer_captures_scores_holds_and_kicks_out():
         assert not world.held[0, 0]
     x, y = world.balls[0, 0, [BALL_X, BALL_Y]]
     assert math.atan2(y - 0.5, x - 0.255) == pytest.approx(math.atan2(0.5, 1.0))
-    assert math.hypot(*world.balls[0, 0, [BALL_VX, BALL_VY]]) == pytest.approx(
-        math.hypot(1.0, 0.5)
-    )
+    assert math.hypot(*world.balls[0, 0, [BALL_VX, BALL_VY]]) == pytest.approx(math.hypot(1.0, 0.5))
 
 
 def test_a_fast_ball_passes_over_a_saucer():
