@@ -63,7 +63,7 @@ def test_multiball_kernel_figure_keeps_its_balls_in_play(monkeypatch):
 
     def counted(*args):
         faults = step(*args)
-        in_play.append(int(args[4].active.sum()))
+        in_play.append(int(args[2].active.sum()))  # the State: its ball slots
         return faults
 
     monkeypatch.setattr(multiball, "step_multiworld", counted)
