@@ -31,10 +31,15 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the agents package, run from the checkout
 
-import pinball_env  # noqa: E402  (registers the envs)
 from pinball_env.options import PinballOptions, VectorOptions  # noqa: E402
+from pinball_env.versions import (  # noqa: E402  (importing the package registers the envs)
+    ENV_VERSIONS,
+    EnvVersion,
+    recordable_versions,
+    version_history,
+)
 
-# The pages describe Pinball-v0 and -v1 too, which Gymnasium calls out of date beside -v2.
+# The pages describe the older versions too, which Gymnasium calls out of date beside the newest.
 warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
 
 PAGES = (ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")))
@@ -60,17 +65,38 @@ def _table(header: tuple[str, ...], rows: list[tuple[object, ...]]) -> str:
 # --- the envs ------------------------------------------------------------------------------------
 
 
+def _benchmark_role(version: EnvVersion) -> str:
+    """An env's place in the benchmark protocol, in words."""
+    if version.track is None:
+        return "-"
+    return "the protocol's env" if version.track == 0 else "a track"
+
+
 def envs(_: str = "") -> str:
-    """The registered envs: id, table, spaces and what each is."""
+    """The registered envs (their version records): id, table, spaces, benchmark role and what
+    each is."""
     rows = []
-    for env_id, summary in pinball_env.ENVS.items():
-        env = gym.make(env_id)
-        spec = env.spec
-        table = spec.kwargs.get("table", PinballOptions.table)
-        rows.append((f"`{env_id}`", f"`{table}`", f"`{env.action_space}`",
-                     f"`{env.observation_space.shape}`", summary))  # fmt: skip
+    for version in ENV_VERSIONS.values():
+        env = gym.make(version.id)
+        rows.append((f"`{version.id}`", f"`{version.table}`", f"`{env.action_space}`",
+                     f"`{env.observation_space.shape}`", _benchmark_role(version),
+                     version.summary))  # fmt: skip
         env.close()
-    return _table(("id", "table", "actions", "state observation", "what it is"), rows)
+    header = ("id", "table", "actions", "state observation", "benchmark", "what it is")
+    return _table(header, rows)
+
+
+def version_history_list(_: str = "") -> str:
+    """The version history, from the version records: each env's name together, newest
+    first."""
+    return "".join(f"- **{v.id}**: {v.history}\n" for v in version_history())
+
+
+def recordable_envs(_: str = "") -> str:
+    """The envs the play tool plays and records, each with its own table, the default first."""
+    named = [f"`{v.id}` (on `{v.table}`)" for v in recordable_versions()]
+    named[0] = named[0].replace("(on", "(the default, on")
+    return ", ".join(named[:-1]) + f" or {named[-1]}.\n"
 
 
 def actions(env_id: str) -> str:
@@ -265,6 +291,8 @@ def references(_: str = "") -> str:
 
 GENERATORS: dict[str, Callable[[str], str]] = {
     "envs": envs,
+    "version-history": version_history_list,
+    "recordable-envs": recordable_envs,
     "actions": actions,
     "observation": observation,
     "options": options,

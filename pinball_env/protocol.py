@@ -3,13 +3,13 @@
 As ALE's (Machado et al. 2018) and Procgen's protocols, and with rliable's aggregate metrics
 (Agarwal et al. 2021):
 
-- **Envs**: ``Pinball-v3`` (the whole cabinet, its full action set of 32 actions, a tilt that
-  any sustained nudging trips, multiball); ``Pinball-v2`` (the same game of one ball),
-  ``Pinball-v1`` (v2's game with v1's tilt, which ignores one-way nudging) and ``Pinball-v0``
-  (flippers only), each a track of its own: each on its own
-  table, 3 balls, a game of two minutes (:data:`GAME_OPTIONS`). An agent may choose how it sees
-  and acts (``obs_type``, ``frame_skip``, ``skip_above``, ``rays``, ``nudge_actions``, its
-  reward shaping), not the game.
+- **Envs** (:data:`PROTOCOL_ENV_IDS`, from the versions' records): ``Pinball-v3`` (the whole
+  cabinet, its full action set of 32 actions, a tilt that any sustained nudging trips,
+  multiball); ``Pinball-v2`` (the same game of one ball), ``Pinball-v1`` (v2's game with v1's
+  tilt, which ignores one-way nudging) and ``Pinball-v0`` (flippers only), each a track of its
+  own: each on its own table, 3 balls, a game of two minutes (:data:`GAME_OPTIONS`). An agent
+  may choose how it sees and acts (``obs_type``, ``frame_skip``, ``skip_above``, ``rays``,
+  ``nudge_actions``, its reward shaping), not the game.
 - **Sticky actions** in evaluation: ``repeat_action_probability`` 0.25, as ALE v5, drawn frame by
   frame from each game's own random stream, so that no evaluation is a sequence an agent could
   learn by heart.
@@ -38,21 +38,22 @@ from typing import Any
 import numpy as np
 
 from pinball_env.options import GAME_FRAMES
+from pinball_env.versions import ENV_VERSIONS, benchmark_versions
 
-# The envs of the protocol: the whole cabinet with the tilt any sustained nudging trips and
-# multiball first, then the same game of one ball, v1's cabinet (whose tilt ignores one-way
-# nudging) and the flippers-only game, as tracks.
-ENV_IDS = ("Pinball-v3", "Pinball-v2", "Pinball-v1", "Pinball-v0")
+# The envs of the protocol, in the order of its tables (the versions' tracks): the whole
+# cabinet with the tilt any sustained nudging trips and multiball first, then the same game of
+# one ball, v1's cabinet (whose tilt ignores one-way nudging) and the flippers-only game.
+PROTOCOL_ENV_IDS = tuple(version.id for version in benchmark_versions())
 # ALE v5's sticky actions: each frame repeats the last one's buttons with this probability.
 REPEAT_ACTION_PROBABILITY = 0.25
 # The game every protocol evaluation plays, whatever the agent's own options: its table (the
 # env id's), 3 balls, two minutes (GAME_FRAMES), the swept physics. An agent's config
 # may not change these.
 GAME_OPTIONS: dict[str, Any] = {"balls": 3, "max_frames": GAME_FRAMES, "physics": "swept"}
-# Env options that change the game rather than the agent's view of it (see check_agent_options):
-# the game's (a step limit would cut it short; the time is max_frames'); the sticky actions are
-# the protocol's whatever an agent trained with.
-FIXED_OPTIONS = ("table", "balls", "max_frames", "physics", "max_episode_steps")
+# Env options that change the game rather than the agent's view of it, which the protocol fixes
+# (see check_agent_options): the game's (a step limit would cut it short; the time is
+# max_frames'); the sticky actions are the protocol's whatever an agent trained with.
+PROTOCOL_FIXED_OPTIONS = ("table", "balls", "max_frames", "physics", "max_episode_steps")
 # A training run's budget: frames summed over its envs, a warm start's included
 # (``total_frames`` of a training config). The shipped PPO trains this in 38 minutes alone on a
 # 2-core machine (configs/agents/ppo_gentle_v1.yaml, seed 3: 37.8 minutes).
@@ -111,18 +112,18 @@ def check_agent_options(
     """ValueError if ``env_id`` is not a protocol env, or naming each option of ``options``
     that would change the protocol's game (another table, balls, time or physics) rather than
     the agent's view of it."""
-    if env_id not in ENV_IDS:
-        raise ValueError(f"{env_id!r} is not an env of the protocol ({', '.join(ENV_IDS)})")
-    import gymnasium as gym
-
+    if env_id not in PROTOCOL_ENV_IDS:
+        raise ValueError(
+            f"{env_id!r} is not an env of the protocol ({', '.join(PROTOCOL_ENV_IDS)})"
+        )
     game = {
         **GAME_OPTIONS,
-        "table": gym.spec(env_id).kwargs.get("table", "classic"),
+        "table": ENV_VERSIONS[env_id].table,
         "max_episode_steps": None,
     }
     changed = [
         f"{key}={options[key]!r}"
-        for key in FIXED_OPTIONS
+        for key in PROTOCOL_FIXED_OPTIONS
         if key in options and (key not in game or options[key] != game[key])
     ]
     if changed:
@@ -237,13 +238,13 @@ def aggregate(runs: Sequence[Any], env_id: str) -> dict[str, Any]:
 __all__ = [
     "BOOTSTRAP_SAMPLES",
     "CONFIDENCE",
-    "ENV_IDS",
     "EVAL_SEEDS",
-    "FIXED_OPTIONS",
     "GAME_OPTIONS",
     "HUMAN_SCORES",
     "LONG_TRAINING_FRAMES",
     "PROFILE_TAUS",
+    "PROTOCOL_ENV_IDS",
+    "PROTOCOL_FIXED_OPTIONS",
     "REFERENCE_SCORES",
     "REPEAT_ACTION_PROBABILITY",
     "TRAINING_BUDGETS",

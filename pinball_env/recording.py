@@ -49,8 +49,10 @@ import gymnasium as gym
 
 from pinball_env import __version__  # importing the package registers the envs
 from pinball_env.table import Table, table_to_dict
+from pinball_env.versions import ENV_VERSIONS, recordable_versions
 
-ENV_IDS = ("Pinball-v0", "Pinball-v1", "Pinball-v2", "Pinball-v3")  # what may be recorded
+# The envs whose games may be recorded (and replayed), the play tool's default first.
+RECORDABLE_ENV_IDS = tuple(version.id for version in recordable_versions())
 FORMAT = "pinball-env-recording"
 # Format versions, by their actions: 1, digits 0-3 (a table without a cabinet); 2, base-32
 # characters 0-9a-v (the cabinet's 32 actions). A recording is written in the first that holds
@@ -59,8 +61,9 @@ FORMAT_VERSIONS = (1, 2)
 FORMAT_VERSION = FORMAT_VERSIONS[-1]  # the newest
 ACTION_CHARACTERS = {1: "0123", 2: "0123456789abcdefghijklmnopqrstuv"}
 ENDS = ("game over", "time limit", "restart", "quit")
-# Options a recording cannot carry: it renders itself, and its actions are discrete.
-FIXED_OPTIONS = ("render_mode", "action_type")
+# Options a recording cannot carry, which the play tool fixes: it renders itself, and its
+# actions are discrete.
+RECORDING_FIXED_OPTIONS = ("render_mode", "action_type")
 
 # Called before each step of a replay with the env and the game's name ("game 1 (seed 5)"):
 # a viewer shows the frame, may wait (a pause) and may raise to stop the replay.
@@ -119,7 +122,7 @@ def encode_action(action: int, version: int) -> str:
     return ACTION_CHARACTERS[version][action]
 
 
-def decode_actions(actions: str) -> list[int]:
+def decode_recorded_actions(actions: str) -> list[int]:
     """The discrete actions of a recording's ``actions`` string (any format version)."""
     return [int(character, 32) for character in actions]
 
@@ -135,14 +138,16 @@ def format_version(n_actions: int) -> int:
 
 def default_table(env_id: str) -> str:
     """The table ``env_id`` plays unless told another (``classic``, ``classic_v1``)."""
-    return str(gym.spec(env_id).kwargs.get("table", "classic"))
+    return ENV_VERSIONS[env_id].table
 
 
 def make_recorded_env(
-    options: Mapping[str, Any], max_episode_steps: int | None = None, env_id: str = ENV_IDS[0]
+    options: Mapping[str, Any],
+    max_episode_steps: int | None = None,
+    env_id: str = RECORDABLE_ENV_IDS[0],
 ) -> gym.Env:
     """The env a recording is played on: ``gym.make(env_id, **options)``, rendering frames."""
-    for key in FIXED_OPTIONS:
+    for key in RECORDING_FIXED_OPTIONS:
         if key in options:
             raise ValueError(f"the play tool sets {key} itself; do not pass it as an option")
     kwargs = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
@@ -194,11 +199,11 @@ def parse_recording(data: Any, source: str = "recording") -> Recording:
             f"recorded with pinball-env {top['package_version']}, this is {__version__}: a game "
             "can differ between versions, so it is not replayed"
         )
-    if top["env_id"] not in ENV_IDS:
-        known = ", ".join(map(repr, ENV_IDS[:-1])) + f" or {ENV_IDS[-1]!r}"
+    if top["env_id"] not in RECORDABLE_ENV_IDS:
+        known = ", ".join(map(repr, RECORDABLE_ENV_IDS[:-1])) + f" or {RECORDABLE_ENV_IDS[-1]!r}"
         raise fail(f"env_id {top['env_id']!r}: only {known} games are recorded")
     options = top["options"]
-    for key in FIXED_OPTIONS:
+    for key in RECORDING_FIXED_OPTIONS:
         if key in options:
             raise fail(f"options.{key} is set by the play tool, it cannot be recorded")
     steps = top["max_episode_steps"]
@@ -296,7 +301,7 @@ def _check_table(recording: Recording, env: gym.Env) -> None:
         )
     n_actions = env.action_space.n
     for index, game in enumerate(recording.games):
-        for step, action in enumerate(decode_actions(game.actions)):
+        for step, action in enumerate(decode_recorded_actions(game.actions)):
             if action >= n_actions:
                 raise RecordingError(
                     f"games[{index}].actions: {game.actions[step]!r} at step {step} is "
@@ -310,7 +315,7 @@ def _replay_game(env: gym.Env, game: GameRecord, index: int, viewer: Viewer | No
     ends as recorded."""
     name = f"game {index + 1} (seed {game.seed})"
     _, info = env.reset(seed=game.seed)
-    actions = decode_actions(game.actions)
+    actions = decode_recorded_actions(game.actions)
     ended: str | None = None
     for step, action in enumerate(actions):
         if viewer is not None:

@@ -42,28 +42,29 @@ def test_the_table_imports_only_physics_and_itself(path):
 
 # What each floor may import from the package (besides itself), bottom up: the arrows run
 # agents -> wrappers/envs -> observation/game -> sim -> table/procgen -> physics, with the
-# declarations every floor may use (checks, extras, protocol) beside them, the scripted players
-# and the recording format over the game, and the tools on top of it all. "__init__" is the
-# package itself (its version, its registration of the envs).
+# declarations every floor may use (checks, extras, protocol, versions) beside them, the
+# scripted players and the recording format over the game, and the tools on top of it all.
+# "__init__" is the package itself (its version, its registration of the envs).
 BELOW_TOOLS = {
     "physics": (),
     "checks.py": ("table",),  # the kinds of value are the table's (table/fields.py)
     "extras.py": (),
-    "protocol.py": ("options",),  # the protocol's game is options' GAME_FRAMES
+    "protocol.py": ("options", "versions"),  # its game is options' GAME_FRAMES
     "table": ("physics",),
     "sim": ("physics", "table", "extras"),
     "procgen": ("physics", "table", "sim"),  # its playability check plays balls on a World
     "render": ("physics", "table", "sim", "extras"),
     "options.py": ("checks", "table", "procgen", "sim"),
+    "versions.py": ("options",),  # a generated table's source is options' GENERATED
     "game": ("physics", "table", "sim", "options", "checks"),
     "observation.py": ("physics", "table", "sim", "game", "render"),
     "envs": ("physics", "table", "sim", "procgen", "game", "options", "checks", "observation",
              "render"),
-    "__init__.py": ("options", "procgen"),
+    "__init__.py": ("options", "procgen", "versions"),
     "wrappers": ("envs", "extras"),
     "players": ("physics", "table", "sim", "game"),
     "heuristic.py": ("players",),  # the documented import path of the heuristic
-    "recording.py": ("__init__", "table"),
+    "recording.py": ("__init__", "table", "versions"),
 }  # fmt: skip
 FLOORS = {**BELOW_TOOLS, "tools": ("__init__", *(f.removesuffix(".py") for f in BELOW_TOOLS))}
 

@@ -12,7 +12,7 @@ scores_lists = st.lists(st.integers(0, 200_000), min_size=1, max_size=60)
 
 
 def test_the_protocol_envs_take_its_options():
-    for env_id in protocol.ENV_IDS:
+    for env_id in protocol.PROTOCOL_ENV_IDS:
         options = protocol.protocol_options(env_id, {"obs_type": "state", "skip_above": 0.3})
         assert options["repeat_action_probability"] == protocol.REPEAT_ACTION_PROBABILITY == 0.25
         env = gym.make(env_id, **options)

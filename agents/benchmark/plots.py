@@ -16,7 +16,11 @@ def plot_benchmark(methods: dict[str, Any], out: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    envs = [env for env in protocol.ENV_IDS if any(m["env_id"] == env for m in methods.values())]
+    envs = [
+        env
+        for env in protocol.PROTOCOL_ENV_IDS
+        if any(m["env_id"] == env for m in methods.values())
+    ]
     for kind, draw in (("scores", _draw_scores), ("profiles", _draw_profiles)):
         figure, axes = plt.subplots(1, len(envs), figsize=(6.0 * len(envs), 4.0), squeeze=False)
         for ax, env_id in zip(axes[0], envs, strict=True):

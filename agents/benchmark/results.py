@@ -138,7 +138,7 @@ def protocol_record(settings: JobSettings) -> dict[str, Any]:
     """The protocol as this benchmark applies it (``benchmark.json``'s ``protocol``)."""
     first = protocol.EVAL_SEEDS.start
     return {
-        "env_ids": list(protocol.ENV_IDS),
+        "env_ids": list(protocol.PROTOCOL_ENV_IDS),
         "repeat_action_probability": protocol.REPEAT_ACTION_PROBABILITY,
         "game": protocol.GAME_OPTIONS,
         "training_frames": TINY_FRAMES if settings.tiny else protocol.TRAINING_FRAMES,

@@ -16,8 +16,8 @@ from pinball_env.table import BUTTONS, Table
 
 
 class PinballEnv(CoreAttributes, gym.Env):
-    """A real flipper-and-ball pinball machine, one game: ``gym.make("Pinball-v2")`` and the
-    other ids of ``pinball_env.ENVS``.
+    """A real flipper-and-ball pinball machine, one game: ``gym.make("Pinball-v3")`` and the
+    other ids of ``pinball_env.versions.ENV_VERSIONS``.
 
     ## Description
 
@@ -25,7 +25,7 @@ class PinballEnv(CoreAttributes, gym.Env):
     6.5 degrees, pop bumpers, slingshots, in- and outlanes, two flippers and a drain) moved by
     swept (continuous) collision in fixed substeps, so it never passes through a wall, a target
     or a flipper. The agent works the flipper buttons, and on a table with the cabinet
-    (``Pinball-v1``, ``-v2``) the plunger and three nudges, under a plumb-bob tilt. A game is
+    (``Pinball-v1`` to ``-v3``) the plunger and three nudges, under a plumb-bob tilt. A game is
     ``balls`` balls, or two minutes of play; the reward is the game's points times
     ``reward_scale``.
 
@@ -42,16 +42,26 @@ class PinballEnv(CoreAttributes, gym.Env):
 
     ## Version History
 
-    - v2: v1's game with a tilt that any sustained nudging trips (``classic_v2``: the ring at
-      1 degree, ``settle_time`` 1 s): every nudge is a warning. The benchmark protocol's env.
-    - v1: the whole cabinet on ``classic_v1`` (the classic layout): the player's plunger and a
-      skill shot, the nudge, the plumb-bob tilt; 32 actions. Then rules and targets on
-      ``classic_v1`` (top lanes with lane change and the bonus multiplier, a drop bank, a
-      spinner, a stand-up, a kickback, ball save; the observation's rule rows, 29 in all),
-      which changed v1's games and scores. (``gym.make("Pinball-v0")`` and ``-v1`` say that a
-      newer version exists, as Gymnasium does for every older version; their games are
-      bitwise unchanged.)
-    - v0: first release: swept collision against walls, posts and rotating flippers.
+    Each version's record in ``pinball_env.versions`` (``tests/test_versions.py`` holds this
+    list to them). ``gym.make`` of any but the newest ``Pinball`` version says that a newer one
+    exists, as Gymnasium does for every older version; their games are bitwise unchanged.
+
+    - Pinball-v3: v2's game with multiball (``classic_v3``: v2's table with a two-ball lock, a
+      saucer, a trough of three balls and its auto-plunger, the jackpot lit only during a
+      multiball); a row block per ball in the state observation, rays that see every ball and
+      the standing drop targets.
+    - Pinball-v2: v1's game with a tilt that any sustained nudging trips (``classic_v2``: the
+      plumb bob's ring at 1 degree, ``settle_time`` 1 s): every nudge is a warning.
+    - Pinball-v1: the whole cabinet on ``classic_v1`` (the classic layout): the player's
+      plunger and a skill shot, the nudge, the plumb-bob tilt; 32 actions. Then rules and
+      targets on ``classic_v1`` (top lanes with lane change and the bonus multiplier, a drop
+      bank, a spinner, a stand-up, a kickback, ball save; the observation's rule rows, 29 in
+      all), which changed v1's games and scores.
+    - Pinball-v0: the first release: swept collision against walls, posts and rotating
+      flippers.
+    - PinballProcgen-v0: the first release: a generated table every game (``num_layouts``,
+      ``start_layout``, ``difficulty``). Then the ``targets`` option, whose default leaves
+      every game as it was.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 60}

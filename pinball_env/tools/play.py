@@ -49,10 +49,9 @@ import numpy as np
 
 from pinball_env.envs import PinballEnv
 from pinball_env.game import discrete_action
-from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
-from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
+from pinball_env.protocol import PROTOCOL_ENV_IDS, REPEAT_ACTION_PROBABILITY
 from pinball_env.recording import (
-    ENV_IDS,
+    RECORDABLE_ENV_IDS,
     GameRecord,
     Recording,
     RecordingError,
@@ -68,7 +67,7 @@ from pinball_env.recording import replay as replay_recording
 from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Window
 from pinball_env.tools.demo import has_display
 
-ENV_ID = ENV_IDS[0]  # the env played by default
+ENV_ID = RECORDABLE_ENV_IDS[0]  # the env played by default
 
 BANNER_PAUSED = "PAUSED\nP: play on"
 BANNER_OVER = "GAME OVER\nR: new game, Q: quit"
@@ -248,7 +247,7 @@ class PlayLoop:
     ``MAX_CABINET_KEYS`` keys with a cabinet key), the first nudge winning as in the map.
     :meth:`close` ends the game in play and writes the recording.
 
-    ``options``: ``gym.make`` options of ``env_id`` (one of :data:`ENV_IDS`; ``table``
+    ``options``: ``gym.make`` options of ``env_id`` (one of :data:`RECORDABLE_ENV_IDS`; ``table``
     defaults to the env's own, ``"classic"`` or ``"classic_v1"`` to ``"classic_v3"``; not
     ``render_mode`` or ``action_type``, which the tool sets); ``seed``: the first game's (None:
     a random one; each restart takes the next); ``record``: the recording's path; ``fps``:
@@ -263,8 +262,8 @@ class PlayLoop:
         fps: float | None = None,
         env_id: str = ENV_ID,
     ) -> None:
-        if env_id not in ENV_IDS:
-            known = ", ".join(ENV_IDS[:-1]) + f" or {ENV_IDS[-1]}"
+        if env_id not in RECORDABLE_ENV_IDS:
+            known = ", ".join(RECORDABLE_ENV_IDS[:-1]) + f" or {RECORDABLE_ENV_IDS[-1]}"
             raise ValueError(f"the play tool plays {known}, not {env_id!r}")
         self.options = {"table": default_table(env_id), **(options or {})}
         self.env = make_recorded_env(self.options, env_id=env_id)
@@ -385,7 +384,7 @@ def parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "--env",
-        choices=ENV_IDS,
+        choices=RECORDABLE_ENV_IDS,
         help=f"the env to play (default {ENV_ID}, or with --protocol {PROTOCOL_ENV_IDS[0]}; "
         "Pinball-v1 to -v3: the plunger, nudge and tilt)",
     )

@@ -46,10 +46,9 @@ import gymnasium as gym
 
 from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
-from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
-from pinball_env.protocol import REPEAT_ACTION_PROBABILITY
+from pinball_env.protocol import PROTOCOL_ENV_IDS, REPEAT_ACTION_PROBABILITY
 from pinball_env.recording import (
-    ENV_IDS,
+    RECORDABLE_ENV_IDS,
     RecordingError,
     default_table,
     load_recording,
@@ -251,7 +250,9 @@ def parser() -> argparse.ArgumentParser:
         "--max-viewers", type=int, default=MAX_VIEWERS,
         help=f"pages at once, each its own game (default {MAX_VIEWERS})",
     )  # fmt: skip
-    parser.add_argument("--env", choices=ENV_IDS, help="the env (default Pinball-v0)")
+    parser.add_argument(
+        "--env", choices=RECORDABLE_ENV_IDS, help=f"the env (default {RECORDABLE_ENV_IDS[0]})"
+    )
     parser.add_argument("--table", help="table name or YAML path (default: the env's own)")
     parser.add_argument(
         "--seed", type=int, help="seed of the first game (default: random in play, 0 in watch)"
@@ -316,7 +317,7 @@ def unwritable(path: Path) -> str | None:
 
 def default_env_id(args: argparse.Namespace) -> str:
     """The env of the command line's game: ``--env``, else the protocol's or the first."""
-    return args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else ENV_IDS[0])
+    return args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else RECORDABLE_ENV_IDS[0])
 
 
 def env_options(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:

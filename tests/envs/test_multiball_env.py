@@ -29,8 +29,8 @@ def more_balls(env, envs, count=2):
 
 
 def test_pinball_v3_is_registered_on_classic_v3():
-    assert pinball_env.TABLES["Pinball-v3"] == "classic_v3"
-    assert "Pinball-v3" in pinball_env.ENVS and "classic_v3" in available_tables()
+    assert pinball_env.ENV_VERSIONS["Pinball-v3"].table == "classic_v3"
+    assert "classic_v3" in available_tables()
     env = gym.make("Pinball-v3")
     assert env.unwrapped.table.name == "classic_v3" and env.unwrapped.table.n_balls == 3
     env.close()

@@ -28,7 +28,7 @@ import pinball_env
 from pinball_env.recording import (
     GameRecord,
     RecordingError,
-    decode_actions,
+    decode_recorded_actions,
     load_recording,
     parse_recording,
     table_sha256,
@@ -565,7 +565,7 @@ def test_a_cabinet_recording_holds_the_actions_in_base_32(cabinet_recorded):
     assert first[:50] == "4" * 50 and first[60:62] == "88" and first[70:75] == "s" * 5
     assert first[90:120] == "3" * 30 and len(first) == 150
     assert data["games"][1]["actions"] == "0" + "g" * 29  # NUDGE_RIGHT (16) held
-    assert decode_actions("0s3g") == [0, 28, 3, 16]
+    assert decode_recorded_actions("0s3g") == [0, 28, 3, 16]
     assert load_recording(path).games == games
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from pinball_env.envs import PinballEnv
 from pinball_env.players import HeuristicPolicy
-from pinball_env.recording import load_recording, write_recording
+from pinball_env.recording import RECORDABLE_ENV_IDS, load_recording, write_recording
 from pinball_env.recording import replay as replay_recording
 from pinball_env.tools import serve
 from pinball_env.tools.play import COMMAND_KEYS
@@ -32,7 +32,6 @@ from pinball_env.tools.web.sessions import (
 )
 from pinball_env.tools.web.stream import BROWSER_KEYS, geometry, page_keys
 
-ENV_IDS = ("Pinball-v0", "Pinball-v1", "Pinball-v2", "Pinball-v3")
 LEFT = 0  # the left flipper's index in a frame's "flippers"
 
 
@@ -71,7 +70,7 @@ def recording_path(tmp_path_factory) -> Path:
 # --- the messages ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("env_id", ENV_IDS)
+@pytest.mark.parametrize("env_id", RECORDABLE_ENV_IDS)
 def test_hello_sends_the_geometry_once_and_frames_send_the_state(env_id):
     session = PlaySession(env_id, seed=1)
     (hello,) = session.hello()
@@ -99,7 +98,7 @@ def test_hello_sends_the_geometry_once_and_frames_send_the_state(env_id):
     session.close()
 
 
-@pytest.mark.parametrize("env_id", ENV_IDS)
+@pytest.mark.parametrize("env_id", RECORDABLE_ENV_IDS)
 def test_the_page_buttons_are_the_play_tools_keys_and_actions(env_id):
     """Every key of the play tool has its browser name, and every button held gives the action
     of its key in get_keys_to_action (the play tool's map), on every env."""

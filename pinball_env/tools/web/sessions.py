@@ -40,7 +40,7 @@ from pinball_env.game import GameState
 from pinball_env.recording import (
     GameRecord,
     Recording,
-    decode_actions,
+    decode_recorded_actions,
     encode_action,
     format_version,
     make_recorded_env,
@@ -426,7 +426,7 @@ class ReplayIndex:
             raise ValueError(f"snapshots every {every} frames: must be at least 1")
         self.recording = recording
         self.every = every
-        self.actions = [decode_actions(game.actions) for game in recording.games]
+        self.actions = [decode_recorded_actions(game.actions) for game in recording.games]
         self.scores: list[list[int]] = [[] for _ in recording.games]
         self.snapshots: list[list[Snapshot]] = [[] for _ in recording.games]
         starts = np.cumsum([0, *map(len, self.actions)])
