@@ -1,6 +1,9 @@
 """Pinball tables as validated data.
 
-- ``model.py``: the table model (frozen dataclasses) and ``Table.pack()``, the kernel's arrays;
+- ``parts.py``: the table's parts (frozen dataclasses: its elements and sections);
+- ``kinds.py``: the element kinds' registry (key, class, fields, element ids, drawing), which
+  the parsing, the writing back, the element ids, the renderer and the web page read;
+- ``model.py``: ``Table``, the validated table, and ``Table.pack()``, the kernel's arrays;
 - ``rules.py``: the rules as data (``RuleSet``: lights, counters, timers, triggers, effects);
 - ``schema.py``: ``table_from_dict``, the table schema's top level, over its parts:
   ``fields.py`` (the kinds of value and ``TableError``), ``elements.py``, ``cabinet.py``,
@@ -18,7 +21,18 @@
 from pinball_env.table.fields import MAX_BALL_SPEED, TableError
 from pinball_env.table.files import dump_table
 from pinball_env.table.geometry import check_ball_state
-from pinball_env.table.model import (
+from pinball_env.table.model import Table
+from pinball_env.table.names import (
+    TABLES_DIR,
+    TEST_TABLES,
+    available_tables,
+    builtin_tables_dir,
+    generated_prefixes,
+    load_any_table,
+    load_table,
+    register_generator,
+)
+from pinball_env.table.parts import (
     BUTTONS,
     Ball,
     Cabinet,
@@ -29,20 +43,9 @@ from pinball_env.table.model import (
     Sensor,
     Simulation,
     SkillShot,
-    Table,
     Tilt,
     Wall,
     enclosure,
-)
-from pinball_env.table.names import (
-    TABLES_DIR,
-    TEST_TABLES,
-    available_tables,
-    builtin_tables_dir,
-    generated_prefixes,
-    load_any_table,
-    load_table,
-    register_generator,
 )
 from pinball_env.table.schema import table_from_dict
 from pinball_env.table.serialise import table_to_dict
