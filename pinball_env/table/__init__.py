@@ -9,9 +9,11 @@
   ``fields.py`` (the kinds of value and ``TableError``), ``elements.py``, ``cabinet.py``,
   ``rules_schema.py`` (the ``rules`` section) and ``geometry.py`` (the checks that tie places
   together, ``check_ball_state``); ``serialise.py``: ``table_to_dict``;
-- ``files.py``: a table read from a YAML file and written to one (``dump_table``);
+- ``files.py``: a table file read and written (``dump_table``), and how a file derived from a
+  ``base`` is laid over it (``merge_description``);
 - ``names.py``: tables by name: the built-in tables (``tables/*.yaml``, package data), files
-  (``load_table``) and generated tables (``load_any_table``; generators such as
+  (``load_table``; ``table_description``, a file's description with its ``base`` resolved) and
+  generated tables (``load_any_table``; generators such as
   ``pinball_env.procgen`` register their names' prefixes with ``register_generator``);
 - ``reachable.py``: the free space a ball from the plunger can get to (checks reset positions).
 - ``reference.py``: the reference of the table files (``schema_fields``, ``rule_keys``,
@@ -31,6 +33,7 @@ from pinball_env.table.names import (
     load_any_table,
     load_table,
     register_generator,
+    table_description,
 )
 from pinball_env.table.parts import (
     BUTTONS,
@@ -77,6 +80,7 @@ __all__ = [
     "load_any_table",
     "load_table",
     "register_generator",
+    "table_description",
     "table_from_dict",
     "table_to_dict",
 ]
