@@ -7,11 +7,14 @@ ball-ball ``ball.material``), parsed part by part into a frozen
 missing key, wrong type, non-finite or out-of-range number, bad geometry) raises
 :class:`~pinball_env.table.fields.TableError` with the source, the path of the element and the
 problem; nothing is silently defaulted. The parts have modules of their own: ``fields`` (the
-kinds of value), ``elements``, ``cabinet``, ``rules_schema`` (the ``rules`` section) and
-``geometry`` (the checks that tie places together); ``serialise`` writes a table back.
+kinds of value), ``elements`` (the elements' keys and checks, tied to each element kind by the
+registry ``kinds``, which :func:`parse_elements` reads), ``cabinet``, ``rules_schema`` (the
+``rules`` section) and ``geometry`` (the checks that tie places together); ``serialise`` writes
+a table back.
 
 :data:`TABLE_FIELDS` declares the top level's keys in file order (the sections' own maps come
-from those modules); :mod:`pinball_env.table.reference` documents the table files from it.
+from those modules, the element kinds' from ``kinds``); :mod:`pinball_env.table.reference`
+documents the table files from it.
 """
 
 from __future__ import annotations
