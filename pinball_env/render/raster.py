@@ -40,11 +40,23 @@ from pinball_env.render.colours import (
 from pinball_env.render.painters import draw_moving_parts, paint_disc, paint_line
 from pinball_env.sim.parallel import EnvThreads
 from pinball_env.table import Table
+from pinball_env.table.kinds import Line, static_shapes
 
 WALL_HALF_WIDTH = 0.002  # [m]: walls are drawn 4 mm wide (more where a pixel is coarser)
 SENSOR_HALF_WIDTH = 0.001  # [m]
 TARGET_HALF_WIDTH = 0.003  # [m]: a standing drop target, thicker than a wall
 LAMP_RADIUS = 0.007  # [m]: the rules' lights, and a kickback's lamp
+# The static layer's styles (``table.kinds.Line`` and ``Disc``): a line's colour and half-width,
+# a disc's colour. The web page draws the same (``tools.web.stream``).
+LINE_STYLES = {
+    "wall": (WALL, WALL_HALF_WIDTH),
+    "one_sided": (ONE_SIDED, WALL_HALF_WIDTH),
+    "kicker": (KICKER, WALL_HALF_WIDTH),
+    "sensor": (SENSOR, SENSOR_HALF_WIDTH),
+    "drain": (DRAIN, SENSOR_HALF_WIDTH),
+    "target": (TARGET, TARGET_HALF_WIDTH),
+}
+DISC_COLOURS = {"post": POST, "kicker": KICKER, "drain": DRAIN, "sensor": SENSOR}
 
 # Scale of rendered frames (render()), as opposed to observations, which have a size in pixels.
 PIXELS_PER_METRE = 600.0
@@ -158,32 +170,22 @@ class Renderer:
         return layout, min(1.0, max(0.0, room) / plunger.stroke)
 
     def _static_layer(self) -> np.ndarray:
-        """The playfield, sensors, walls and posts, read-only (frames copy it)."""
+        """The playfield and its static elements (``table.kinds.static_shapes``: sensors, walls,
+        posts, stand-up targets, spinners' and kickbacks' lines, saucers, locks), read-only
+        (frames copy it)."""
         table, view = self.table, self._view
         # Anisotropic images: a world length maps to pixels at the geometric mean scale.
         scale = math.sqrt(view[0] * view[1])
         image = np.empty((self.height, self.width, 3), dtype=np.uint8)
         image[...] = BACKGROUND
-        for sensor in table.sensors:
-            colour = DRAIN if sensor.drain else SENSOR
-            paint_line(image, *sensor.segment, SENSOR_HALF_WIDTH * scale, rgb(colour), *view)
-        for wall in table.walls:
-            colour = ONE_SIDED if wall.one_sided else KICKER if wall.kick > 0 else WALL
-            for segment in wall.segments():
-                paint_line(image, *segment, WALL_HALF_WIDTH * scale, rgb(colour), *view)
-        for post in table.posts:
-            colour = rgb(KICKER if post.kick > 0 else POST)
-            paint_disc(image, *post.center, post.radius, colour, *view)
-        for target in table.standup_targets:
-            paint_line(image, *target.segment, TARGET_HALF_WIDTH * scale, rgb(TARGET), *view)
-        for line in (*table.spinners, *table.kickbacks):
-            paint_line(image, *line.segment, SENSOR_HALF_WIDTH * scale, rgb(SENSOR), *view)
-        # Saucers (a hole) and locks (a hole per slot), where balls are held (multiball).
-        for saucer in table.saucers:
-            paint_disc(image, *saucer.center, saucer.radius, rgb(DRAIN), *view)
-        for lock in table.locks:
-            for slot in lock.slots:
-                paint_disc(image, *slot, 1.2 * table.ball.radius, rgb(SENSOR), *view)
+        for shape in static_shapes(table):
+            if isinstance(shape, Line):
+                colour, half_width = LINE_STYLES[shape.style]
+                paint_line(image, *shape.segment, half_width * scale, rgb(colour), *view)
+            else:
+                paint_disc(
+                    image, *shape.center, shape.radius, rgb(DISC_COLOURS[shape.style]), *view
+                )
         image.flags.writeable = False  # frames copy it; nothing may paint on it
         return image
 
@@ -331,14 +333,7 @@ class Renderer:
                 x0, y0, x1, y1 = spinner.segment
                 paint_line(image, x0 + dx, y0 + dy, x1 + dx, y1 + dy, half, colours["flap"],
                            *view)  # fmt: skip
-            lamps = [
-                (
-                    0.5 * (k.segment[0] + k.segment[2]),
-                    0.5 * (k.segment[1] + k.segment[3]),
-                    targets.kickback_lit[env, j],
-                )
-                for j, k in enumerate(table.kickbacks)
-            ]
+            lamps = [(*k.lamp, targets.kickback_lit[env, j]) for j, k in enumerate(table.kickbacks)]
             if table.rules is not None:
                 lamps += [(*light.at, targets.lights[env, j])
                           for j, light in enumerate(table.rules.lights)]  # fmt: skip

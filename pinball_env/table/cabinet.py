@@ -10,7 +10,7 @@ from functools import partial
 from typing import Any
 
 from pinball_env.table.fields import Where, listing, number, record
-from pinball_env.table.model import Cabinet, Sensor, Tilt
+from pinball_env.table.parts import Cabinet, Sensor, Tilt
 
 # The cabinet's ranges. A real machine weighs 100-140 kg, a shove moves it a few millimetres; the
 # semi-implicit Euler of the substeps needs the spring and damper slow against a substep.

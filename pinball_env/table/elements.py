@@ -2,15 +2,18 @@
 plunger (and its skill shot), stand-up targets, drop banks, spinners and kickbacks, the multiball
 elements (saucers, locks and the trough with its auto-plunger), each with its keys and its
 physically sensible ranges, and the checks that tie them together (unique names, known
-materials, kickers that lose energy, and the geometry checks of
-:mod:`~pinball_env.table.geometry`).
+materials, kickers that lose energy; the geometry checks are
+:mod:`~pinball_env.table.geometry`'s).
 
 A value outside a range is a typo (or an attack): it would make the ball, the table or the work
 of a frame absurd.
 
-Each record's keys are declared once, at module level (``WALL_FIELDS``, ``FLIPPER_FIELDS``, ...):
-the parsers, with :data:`~pinball_env.table.fields.POINT` where the table's point parser goes;
-:mod:`pinball_env.table.reference` documents the table files from them.
+Each record's keys are declared once, at module level (``WALL_FIELDS``, ``FLIPPER_FIELDS``, ...),
+with :data:`~pinball_env.table.fields.POINT` where the table's point parser goes; an element's
+checks beyond its keys' ranges are ``check_wall``, ``check_flipper``, ... The element kinds'
+registry (:mod:`pinball_env.table.kinds`) ties each kind to its keys, its limit and its checks;
+``schema.parse_elements`` parses them by it, and :mod:`pinball_env.table.reference` documents the
+table files from the same declarations.
 """
 
 from __future__ import annotations
@@ -28,9 +31,7 @@ from pinball_env.table.fields import (
     choice,
     describe,
     flag,
-    list_of,
     listing,
-    name_of,
     number,
     pair,
     point_list,
@@ -41,29 +42,18 @@ from pinball_env.table.fields import (
     string,
     velocity_pair,
 )
-from pinball_env.table.geometry import (
-    check_lengths,
-    check_outline,
-    check_pivots,
-    check_swings,
-    solid_walls,
-)
-from pinball_env.table.model import (
+from pinball_env.table.geometry import check_lengths
+from pinball_env.table.parts import (
     BUTTONS,
     AutoPlunger,
     DropBank,
     DropTarget,
     Flipper,
     Kickback,
-    Lock,
     Material,
     Plunger,
-    Post,
-    Saucer,
     Sensor,
     SkillShot,
-    Spinner,
-    StandupTarget,
     Trough,
     Wall,
 )
@@ -226,44 +216,6 @@ TROUGH_FIELDS = {
 }
 
 
-def parse_elements(
-    raw: Mapping[str, Any], top: Where, point: Parser, materials: tuple[Material, ...]
-) -> dict[str, tuple[Any, ...]]:
-    """The walls, posts, flippers and sensors, the targets and the saucers and locks, by group
-    name (the Table's fields), checked together: unique names, known materials, no flipper pivot
-    in a wall. (The places of held balls need the ball's radius: ``geometry.check_held``.)"""
-    post = partial(record, Post, parsers=bound(POST_FIELDS, point))
-    elements = {
-        "walls": _group(raw, top, "walls", partial(_wall, point=point), MAX_SEGMENTS),
-        "posts": _group(raw, top, "posts", post, MAX_POSTS),
-        "flippers": _group(raw, top, "flippers", partial(_flipper, point=point), MAX_FLIPPERS),
-        "sensors": _group(raw, top, "sensors", partial(_sensor, point=point), MAX_SENSORS),
-    }
-    elements.update(_target_groups(raw, top, point))
-    elements.update(_multiball_groups(raw, top, point))
-    n_segments = sum(len(wall.segments()) for wall in elements["walls"])
-    n_segments += len(elements["standup_targets"])
-    if n_segments > MAX_SEGMENTS:
-        top.key("walls").fail(f"{n_segments} segments in all, at most {MAX_SEGMENTS} allowed")
-    targets = [t for bank in elements["drop_targets"] for t in bank.targets]
-    _check_elements({**elements, "drop_targets.targets": tuple(targets)}, materials, top)
-    _check_kickers(elements, materials, top)
-    check_outline(elements["walls"], top)
-    solid = {**elements, "walls": solid_walls(elements)}
-    check_pivots(elements["flippers"], solid["walls"], top)
-    check_swings(solid, top)
-    return elements
-
-
-def _group(
-    raw: Mapping[str, Any], top: Where, key: str, parse: Parser, max_len: int
-) -> tuple[Any, ...]:
-    """The optional list ``raw[key]`` of at most ``max_len`` elements, each parsed at its path
-    ``key[i] 'name'``."""
-    items = list_of(raw.get(key, []), top.key(key), max_len=max_len)
-    return tuple(parse(item, top.key(key).index(i, name_of(item))) for i, item in enumerate(items))
-
-
 def parse_materials(value: object, loc: Where) -> tuple[Material, ...]:
     """The ``materials`` mapping (name -> restitution, friction), at least one."""
     if not isinstance(value, Mapping) or not value:
@@ -276,16 +228,15 @@ def parse_materials(value: object, loc: Where) -> tuple[Material, ...]:
     )
 
 
-def _wall(value: object, loc: Where, point: Parser) -> Wall:
-    wall = record(Wall, value, loc, bound(WALL_FIELDS, point))
+def check_wall(wall: Wall, loc: Where) -> None:
+    """A closed wall has 3 points or more, and no segment has zero length."""
     if wall.closed and len(wall.points) < 3:
         loc.fail(f"a closed polyline needs at least 3 points, got {len(wall.points)}")
     check_lengths(wall.segments(), loc)
-    return wall
 
 
-def _flipper(value: object, loc: Where, point: Parser) -> Flipper:
-    flipper = record(Flipper, value, loc, bound(FLIPPER_FIELDS, point))
+def check_flipper(flipper: Flipper, loc: Where) -> None:
+    """A flipper swings by at most MAX_SWING, and neither end circle swallows the other."""
     swing = abs(flipper.up_angle - flipper.rest_angle)
     if not 0.0 < swing <= MAX_SWING:
         loc.key("up_angle").fail(
@@ -298,13 +249,11 @@ def _flipper(value: object, loc: Where, point: Parser) -> Flipper:
             f"|base_radius - tip_radius| = {taper:g} must be < length {flipper.length:g} "
             "(else one end circle swallows the other)"
         )
-    return flipper
 
 
-def _sensor(value: object, loc: Where, point: Parser) -> Sensor:
-    sensor = record(Sensor, value, loc, bound(SENSOR_FIELDS, point))
+def check_sensor(sensor: Sensor, loc: Where) -> None:
+    """A sensor's line has a length."""
     check_lengths([sensor.segment], loc)
-    return sensor
 
 
 def parse_plunger(value: object, loc: Where, point: Parser) -> Plunger:
@@ -333,7 +282,7 @@ def parse_plunger(value: object, loc: Where, point: Parser) -> Plunger:
     return plunger
 
 
-def _check_elements(
+def check_names_and_materials(
     groups: Mapping[str, tuple[Any, ...]], materials: tuple[Material, ...], top: Where
 ) -> None:
     """Element names are unique across all groups and every material reference resolves."""
@@ -353,7 +302,7 @@ def _check_elements(
                 )
 
 
-def _check_kickers(
+def check_kickers(
     groups: Mapping[str, tuple[Any, ...]], materials: tuple[Material, ...], top: Where
 ) -> None:
     """A kicking wall or post bounces with restitution below 1: a kick adds speed at every hit,
@@ -372,12 +321,11 @@ def _check_kickers(
 # --- targets and rules ---------------------------------------------------------------------------
 
 
-def _kickback(value: object, loc: Where, point: Parser) -> Kickback:
-    kickback = record(Kickback, value, loc, bound(KICKBACK_FIELDS, point))
+def check_kickback(kickback: Kickback, loc: Where) -> None:
+    """A kickback fires the ball at a real kickback's speed."""
     _check_kick(
         kickback.kick, loc.key("kick"), MAX_KICKBACK_SPEED, "a real kickback fires the ball"
     )
-    return kickback
 
 
 def _check_kick(kick: tuple[float, float], loc: Where, most: float, real: str) -> None:
@@ -388,36 +336,14 @@ def _check_kick(kick: tuple[float, float], loc: Where, most: float, real: str) -
         )
 
 
-def _target_groups(raw: Mapping[str, Any], top: Where, point: Parser) -> dict[str, tuple[Any, ...]]:
-    """The stand-up targets, drop banks, spinners and kickbacks, by group name."""
-    standup = partial(record, StandupTarget, parsers=bound(STANDUP_FIELDS, point))
-    drop_bank = partial(record, DropBank, parsers=bound(DROP_BANK_FIELDS, point))
-    spinner = partial(record, Spinner, parsers=bound(SPINNER_FIELDS, point))
-    groups = {
-        "standup_targets": _group(raw, top, "standup_targets", standup, MAX_SEGMENTS),
-        "drop_targets": _group(raw, top, "drop_targets", drop_bank, MAX_DROP_TARGETS),
-        "spinners": _group(raw, top, "spinners", spinner, MAX_SPINNERS),
-        "kickbacks": _group(raw, top, "kickbacks", partial(_kickback, point=point), MAX_KICKBACKS),
-    }
-    n_targets = sum(len(bank.targets) for bank in groups["drop_targets"])
+def check_drop_target_count(banks: tuple[DropBank, ...], loc: Where) -> None:
+    """At most MAX_DROP_TARGETS drop targets over all the banks."""
+    n_targets = sum(len(bank.targets) for bank in banks)
     if n_targets > MAX_DROP_TARGETS:
-        top.key("drop_targets").fail(f"{n_targets} targets in all, at most {MAX_DROP_TARGETS}")
-    return groups
+        loc.fail(f"{n_targets} targets in all, at most {MAX_DROP_TARGETS}")
 
 
 # --- multiball -----------------------------------------------------------------------------------
-
-
-def _multiball_groups(
-    raw: Mapping[str, Any], top: Where, point: Parser
-) -> dict[str, tuple[Any, ...]]:
-    """The saucers and locks, by group name."""
-    saucer = partial(record, Saucer, parsers=bound(SAUCER_FIELDS, point))
-    lock = partial(record, Lock, parsers=bound(LOCK_FIELDS, point))
-    return {
-        "saucers": _group(raw, top, "saucers", saucer, MAX_SAUCERS),
-        "locks": _group(raw, top, "locks", lock, MAX_LOCKS),
-    }
 
 
 def parse_trough(

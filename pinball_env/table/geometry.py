@@ -13,15 +13,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
 
 from pinball_env.physics import flipper_distance, flipper_reach, point_segment_distance
 from pinball_env.table.fields import Where, in_playfield, short, velocity_pair
-from pinball_env.table.model import Flipper, Plunger, Post, Table, Wall, enclosure, inside
+from pinball_env.table.parts import Flipper, Plunger, Post, Wall, enclosure, inside
 from pinball_env.table.reachable import cell_of
+
+if TYPE_CHECKING:  # (the model reads the kinds, which check elements here)
+    from pinball_env.table.model import Table
 
 # A wall or post must keep this far from the area a flipper sweeps [m]. The check samples the
 # swing and each segment at most SWING_SAMPLES times, so on a large flipper it keeps a wall a

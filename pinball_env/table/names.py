@@ -1,9 +1,10 @@
-"""Tables by name: the built-in tables shipped with the package, table files by path, and the
-generated tables.
+"""Tables by name: the built-in tables shipped with the package, table files by path (a file's
+``base`` resolved: :func:`table_description`), and the generated tables.
 
 The built-in tables are package data in ``pinball_env/table/tables/`` (``classic.yaml``, the
-default, and ``box.yaml``), found through :mod:`importlib.resources` so that they work from a
-wheel as well as from a checkout. Generated tables are named ``PREFIX:...``; the package that
+default, its versions ``classic_v1.yaml`` to ``classic_v3.yaml``, each written as the one before
+plus what changed, and ``box.yaml``), found through :mod:`importlib.resources` so that they work
+from a wheel as well as from a checkout. Generated tables are named ``PREFIX:...``; the package that
 makes them registers a function per prefix (:func:`register_generator`: ``pinball_env.procgen``
 registers ``procgen`` and ``procgen-hard``, each also with ``+targets``, when imported, as
 importing ``pinball_env`` does), so that :func:`load_any_table` takes their names while this
@@ -14,12 +15,13 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
-from pinball_env.table.fields import TableError, clipped
-from pinball_env.table.files import SUFFIXES, read_table
+from pinball_env.table.fields import TableError, Where, clipped, describe
+from pinball_env.table.files import SUFFIXES, build_table, merge_description, read_yaml
 from pinball_env.table.model import Table
 
 
@@ -55,7 +57,44 @@ def load_table(name_or_path: str | os.PathLike[str]) -> Table:
     (:func:`load_any_table` also takes generated tables' names.)"""
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise TypeError(f"a table is a name or a path, got {type(name_or_path).__name__}")
-    return read_table(_table_file(name_or_path))
+    path = _table_file(name_or_path)
+    return build_table(table_description(path), str(path))
+
+
+def table_description(name_or_path: str | os.PathLike[str]) -> Any:
+    """The description a table file gives (a built-in table's bare name, or a path), with its
+    ``base`` resolved: a file that names a ``base`` (a built-in table's bare name, or a path,
+    relative to the file's folder) gives its base's description (resolved the same way) with
+    the file's other keys laid over it (:func:`~pinball_env.table.files.merge_description`).
+    An unknown base, or a ring of bases, is a :class:`TableError` naming the file and its key."""
+    return _description(_table_file(name_or_path), ())
+
+
+def _description(path: Path, derived: tuple[Path, ...]) -> Any:
+    """The description of the file at ``path``, which the files ``derived`` (in order) are
+    derived from."""
+    data = read_yaml(path)
+    if not isinstance(data, Mapping) or "base" not in data:
+        return data
+    loc = Where(str(path)).key("base")
+    name = data["base"]
+    if not isinstance(name, str) or not name:
+        loc.fail(f"expected a table's name or path, got {describe(name)}")
+    given = Path(name)
+    builtin = given.suffix not in SUFFIXES and len(given.parts) == 1
+    try:
+        base = _table_file(name if builtin else path.parent / given)
+    except TableError as error:
+        loc.fail(str(error))
+    chain = (*derived, path.resolve())
+    if base.resolve() in chain:
+        ring = " -> ".join(p.name for p in (*chain[chain.index(base.resolve()) :], base))
+        loc.fail(f"a ring of bases: {ring}")
+    change = {key: value for key, value in data.items() if key != "base"}
+    try:
+        return merge_description(_description(base, chain), change, Where(str(path)))
+    except RecursionError:
+        raise TableError(f"{path}: a value is nested too deeply to merge") from None
 
 
 def _table_file(name_or_path: str | os.PathLike[str]) -> Path:

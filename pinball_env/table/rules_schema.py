@@ -31,6 +31,7 @@ from pinball_env.table.fields import (
     short,
     string,
 )
+from pinball_env.table.kinds import KINDS
 from pinball_env.table.rules import (
     EFFECT_NAMES,
     EFFECTS,
@@ -230,24 +231,16 @@ def _effect(value: object, loc: Where, known: Mapping[str, Any]) -> Effect:
     return Effect(kind, names, by if kind == "count" else 0)
 
 
-_NAMED_GROUPS = (
-    "walls",
-    "standup_targets",
-    "posts",
-    "flippers",
-    "sensors",
-    "spinners",
-    "kickbacks",
-    "saucers",
-    "locks",
-)
-
-
 def rule_names(table_elements: Mapping[str, tuple[Any, ...]]) -> dict[str, tuple[str, ...]]:
     """What the rules of a table with these element groups may name."""
     groups = table_elements
-    elements = [e.name for group in _NAMED_GROUPS for e in groups.get(group, ())]
-    elements += [t.name for bank in groups.get("drop_targets", ()) for t in bank.targets]
+    # Every element kind's (a drop bank's targets, not the bank: banks are named apart).
+    elements = [
+        member.name
+        for kind in KINDS
+        for element in groups.get(kind.key, ())
+        for member in kind.members(element)
+    ]
     return {
         "elements": tuple(elements),
         "banks": tuple(bank.name for bank in groups.get("drop_targets", ())),

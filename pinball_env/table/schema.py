@@ -7,11 +7,14 @@ ball-ball ``ball.material``), parsed part by part into a frozen
 missing key, wrong type, non-finite or out-of-range number, bad geometry) raises
 :class:`~pinball_env.table.fields.TableError` with the source, the path of the element and the
 problem; nothing is silently defaulted. The parts have modules of their own: ``fields`` (the
-kinds of value), ``elements``, ``cabinet``, ``rules_schema`` (the ``rules`` section) and
-``geometry`` (the checks that tie places together); ``serialise`` writes a table back.
+kinds of value), ``elements`` (the elements' keys and checks, tied to each element kind by the
+registry ``kinds``, which :func:`parse_elements` reads), ``cabinet``, ``rules_schema`` (the
+``rules`` section) and ``geometry`` (the checks that tie places together); ``serialise`` writes
+a table back.
 
 :data:`TABLE_FIELDS` declares the top level's keys in file order (the sections' own maps come
-from those modules); :mod:`pinball_env.table.reference` documents the table files from it.
+from those modules, the element kinds' from ``kinds``); :mod:`pinball_env.table.reference`
+documents the table files from it.
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ from pinball_env.table.cabinet import (
     parse_tilt,
 )
 from pinball_env.table.elements import (
-    parse_elements,
+    check_kickers,
+    check_names_and_materials,
     parse_materials,
     parse_plunger,
     parse_trough,
@@ -40,36 +44,36 @@ from pinball_env.table.fields import (
     Where,
     bound,
     in_playfield,
+    list_of,
     listing,
     mapping,
+    name_of,
     number,
     record,
-    records,
     short,
     string,
     velocity_pair,
 )
-from pinball_env.table.geometry import check_held, check_launch_path, check_placed
-from pinball_env.table.model import (
+from pinball_env.table.geometry import (
+    check_held,
+    check_launch_path,
+    check_outline,
+    check_pivots,
+    check_placed,
+    check_swings,
+    solid_walls,
+)
+from pinball_env.table.kinds import KINDS, ElementKind, kinds_of
+from pinball_env.table.model import Table
+from pinball_env.table.parts import (
     Ball,
     BallSave,
     Cabinet,
-    DropBank,
-    Flipper,
-    Kickback,
-    Lock,
     Material,
     Plunger,
-    Post,
-    Saucer,
-    Sensor,
     Simulation,
-    Spinner,
-    StandupTarget,
-    Table,
     Tilt,
     Trough,
-    Wall,
 )
 from pinball_env.table.rules import RuleSet
 from pinball_env.table.rules_schema import RULES_FIELDS, parse_rules, rule_names
@@ -94,15 +98,16 @@ SIMULATION_FIELDS = {
 BALL_SAVE_FIELDS = {"time": partial(number, low=0.0, high=60.0, open_low=True, unit="s")}
 
 
-def _elements(cls: type, fields: Mapping[str, Any], max_len: int) -> Parser:
-    """The declaration of a group of elements (each parsed, and checked, in ``elements``)."""
-    return partial(records, cls, parsers=fields, max_len=max_len)
+def _declared(group: str) -> dict[str, Parser]:
+    """The declarations of a group of element kinds' lists (see ``kinds``), in file order."""
+    return {kind.key: kind.declaration for kind in kinds_of(group)}
 
 
 # The keys of the top-level mapping in file order: a parser, the declaration of a record (a
 # partial of ``record`` or ``records``) or a mapping (``playfield``, whose keys are all required,
 # and ``materials``, of any names). ``playfield`` holds Table.width and Table.height; the element
-# groups and sections are parsed by their modules' code from the same maps.
+# kinds' lists come from their registry (``kinds``), parsed by ``parse_elements``, and the
+# sections are parsed by their modules' code from the same maps.
 TABLE_FIELDS: dict[str, Any] = {
     "name": string,
     "playfield": PLAYFIELD_FIELDS,
@@ -110,19 +115,12 @@ TABLE_FIELDS: dict[str, Any] = {
     "gravity": partial(number, low=0.0, high=100.0, open_low=True, unit="m/s^2"),  # Earth's 9.81
     "ball": partial(record, Ball, parsers=BALL_FIELDS),
     "materials": {"NAME": partial(record, Material, parsers=el.MATERIAL_FIELDS)},
-    "walls": _elements(Wall, el.WALL_FIELDS, el.MAX_SEGMENTS),
-    "posts": _elements(Post, el.POST_FIELDS, el.MAX_POSTS),
-    "flippers": _elements(Flipper, el.FLIPPER_FIELDS, el.MAX_FLIPPERS),
-    "sensors": _elements(Sensor, el.SENSOR_FIELDS, el.MAX_SENSORS),
+    **_declared("core"),
     "plunger": partial(record, Plunger, parsers=el.PLUNGER_FIELDS),
     "cabinet": partial(record, Cabinet, parsers=CABINET_FIELDS),
     "tilt": partial(record, Tilt, parsers=TILT_FIELDS),
-    "standup_targets": _elements(StandupTarget, el.STANDUP_FIELDS, el.MAX_SEGMENTS),
-    "drop_targets": _elements(DropBank, el.DROP_BANK_FIELDS, el.MAX_DROP_TARGETS),
-    "spinners": _elements(Spinner, el.SPINNER_FIELDS, el.MAX_SPINNERS),
-    "kickbacks": _elements(Kickback, el.KICKBACK_FIELDS, el.MAX_KICKBACKS),
-    "saucers": _elements(Saucer, el.SAUCER_FIELDS, el.MAX_SAUCERS),
-    "locks": _elements(Lock, el.LOCK_FIELDS, el.MAX_LOCKS),
+    **_declared("targets"),
+    **_declared("multiball"),
     "trough": partial(record, Trough, parsers=el.TROUGH_FIELDS),
     "ball_save": partial(record, BallSave, parsers=BALL_SAVE_FIELDS),
     "rules": partial(record, RuleSet, parsers=RULES_FIELDS),
@@ -159,6 +157,46 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
         **elements,
         **_sections(raw, top, point, ball, elements),
     )
+
+
+def parse_elements(
+    raw: Mapping[str, Any], top: Where, point: Parser, materials: tuple[Material, ...]
+) -> dict[str, tuple[Any, ...]]:
+    """Every element kind's list (see ``kinds``), by key, in file order, checked together:
+    unique names, known materials, kickers that lose energy, the segments' total, the outline,
+    no flipper pivot in a wall and nothing in a flipper's swing. (The places of held balls need
+    the ball's radius: ``geometry.check_held``.)"""
+    elements = {kind.key: _kind_list(raw, top, point, kind) for kind in KINDS}
+    n_segments = sum(len(wall.segments()) for wall in elements["walls"])
+    n_segments += len(elements["standup_targets"])
+    if n_segments > el.MAX_SEGMENTS:
+        top.key("walls").fail(f"{n_segments} segments in all, at most {el.MAX_SEGMENTS} allowed")
+    targets = [t for bank in elements["drop_targets"] for t in bank.targets]
+    check_names_and_materials({**elements, "drop_targets.targets": tuple(targets)}, materials, top)
+    check_kickers(elements, materials, top)
+    check_outline(elements["walls"], top)
+    solid = {**elements, "walls": solid_walls(elements)}
+    check_pivots(elements["flippers"], solid["walls"], top)
+    check_swings(solid, top)
+    return elements
+
+
+def _kind_list(
+    raw: Mapping[str, Any], top: Where, point: Parser, kind: ElementKind
+) -> tuple[Any, ...]:
+    """The optional list ``raw[kind.key]`` of at most ``kind.most`` elements, each parsed and
+    checked at its path ``key[i] 'name'``, then checked as a whole."""
+    loc = top.key(kind.key)
+    parsers = bound(kind.fields, point)
+    parsed = []
+    for i, item in enumerate(list_of(raw.get(kind.key, []), loc, max_len=kind.most)):
+        where = loc.index(i, name_of(item))
+        parsed.append(record(kind.model, item, where, parsers))
+        if kind.check is not None:
+            kind.check(parsed[-1], where)
+    if kind.check_all is not None:
+        kind.check_all(tuple(parsed), loc)
+    return tuple(parsed)
 
 
 def _sections(

@@ -1,8 +1,9 @@
 """A table written back as a description: :func:`table_to_dict` gives the plain lists and dicts
 that :func:`~pinball_env.table.schema.table_from_dict` reads back as the same table (the YAML
-files are ``files.dump_table``'s). Optional sections (targets, rules, the multiball saucers,
-locks, trough and ``ball.material``) are written only where a table has them, so that an older
-table writes, and digests, as it always did."""
+files are ``files.dump_table``'s). The element kinds are written as their registry
+(:mod:`~pinball_env.table.kinds`) says. Optional sections (targets, rules, the multiball
+saucers, locks, trough and ``ball.material``) are written only where a table has them, so that
+an older table writes, and digests, as it always did."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ import dataclasses
 from dataclasses import fields
 from typing import Any
 
-from pinball_env.table.model import Plunger, Table
+from pinball_env.table.kinds import KINDS
+from pinball_env.table.model import Table
+from pinball_env.table.parts import Plunger
 from pinball_env.table.rules import EFFECT_NAMES, TRIGGER_NAMES, Effect, RuleSet, Trigger
 
 
@@ -30,16 +33,14 @@ def table_to_dict(table: Table) -> dict[str, Any]:
         "ball": plain(table.ball, drop=() if table.ball.material else ("material",)),
         "materials": {m.name: plain(m, drop=("name",)) for m in table.materials},
     }
-    for group in ("walls", "posts", "flippers", "sensors"):
-        data[group] = [plain(element) for element in getattr(table, group)]
-    # Targets and rules only where the table has them (older tables write as they did).
-    for group in ("standup_targets", "drop_targets", "spinners", "kickbacks", "saucers"):
-        if getattr(table, group):
-            data[group] = [plain(element) for element in getattr(table, group)]
-    if table.locks:  # a lock's radius only where set (absent: the ball's)
-        data["locks"] = [
-            plain(lock, drop=("radius",) * (lock.radius is None)) for lock in table.locks
-        ]
+    for kind in KINDS:
+        elements = getattr(table, kind.key)
+        if elements or kind.written_when_none:
+            # A field left unset (None: a lock's radius, the ball's) is left out of the file.
+            data[kind.key] = [
+                {key: value for key, value in plain(element).items() if value is not None}
+                for element in elements
+            ]
     if table.trough is not None:
         auto = table.trough.auto_plunger is None
         data["trough"] = plain(table.trough, drop=("auto_plunger",) * auto)

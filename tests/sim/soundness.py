@@ -6,7 +6,7 @@ import numpy as np
 
 from pinball_env.physics import flipper_distance, point_segment_distance
 from pinball_env.sim.world import World
-from pinball_env.table.model import inside
+from pinball_env.table.parts import inside
 
 
 def assert_sound(world: World) -> None:

@@ -5,14 +5,12 @@ import copy
 from functools import cache
 from typing import Any
 
-import yaml
-
-from pinball_env.table import builtin_tables_dir
+from pinball_env.table import table_description
 
 
 @cache
 def _multiball() -> dict[str, Any]:
-    data = yaml.safe_load((builtin_tables_dir() / "classic_v1.yaml").read_text(encoding="utf-8"))
+    data = table_description("classic_v1")  # a fresh copy, its base (classic) resolved
     data["name"] = "classic_v1_multiball"
     data["materials"]["steel"] = {"restitution": 0.95, "friction": 0.1}
     data["ball"]["material"] = "steel"

@@ -33,7 +33,7 @@ from pinball_env.table.elements import (
     MAX_LOCKS,
     MAX_SAUCERS,
 )
-from pinball_env.table.model import AutoPlunger, Lock, Saucer, Trough
+from pinball_env.table.parts import AutoPlunger, Lock, Saucer, Trough
 from pinball_env.table.reference import schema_fields, schema_limits
 from tests.table.multiball import multiball_dict
 

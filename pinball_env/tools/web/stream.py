@@ -44,6 +44,7 @@ from pinball_env.render.raster import (
     WALL_HALF_WIDTH,
 )
 from pinball_env.table import Table
+from pinball_env.table.kinds import Disc, Line, static_shapes
 
 POSITION_DIGITS = 5  # [m] to 10 micrometres
 ANGLE_DIGITS = 4  # [rad]
@@ -78,27 +79,12 @@ def geometry(table: Table, pull_scale: float = 1.0) -> dict[str, Any]:
     lights, in the order of :func:`frame_state`'s lists), the flippers, the player's plunger
     (``pull_scale``: the renderer's scale of its drawn pull, ``Renderer.pull_scale``), and the
     colours and widths of ``pinball_env.render``."""
-    lines: list[list[Any]] = []
-    for sensor in table.sensors:
-        lines.append([*sensor.segment, "drain" if sensor.drain else "sensor"])
-    for wall in table.walls:
-        kind = "one_sided" if wall.one_sided else "kicker" if wall.kick > 0 else "wall"
-        lines += [[*segment, kind] for segment in wall.segments()]
-    for target in table.standup_targets:
-        lines.append([*target.segment, "target"])
-    for line in (*table.spinners, *table.kickbacks):
-        lines.append([*line.segment, "sensor"])
-    discs: list[list[Any]] = [
-        [*post.center, post.radius, "kicker" if post.kick > 0 else "post"] for post in table.posts
+    shapes = list(static_shapes(table))  # as the renderer's static layer, in its order
+    lines = [[*shape.segment, shape.style] for shape in shapes if isinstance(shape, Line)]
+    discs = [
+        [*shape.center, shape.radius, shape.style] for shape in shapes if isinstance(shape, Disc)
     ]
-    discs += [[*saucer.center, saucer.radius, "drain"] for saucer in table.saucers]
-    discs += [
-        [*slot, 1.2 * table.ball.radius, "sensor"] for lock in table.locks for slot in lock.slots
-    ]
-    lamps = [
-        [0.5 * (k.segment[0] + k.segment[2]), 0.5 * (k.segment[1] + k.segment[3])]
-        for k in table.kickbacks
-    ]
+    lamps = [list(kickback.lamp) for kickback in table.kickbacks]
     if table.rules is not None:
         lamps += [list(light.at) for light in table.rules.lights]
     plunger = None
