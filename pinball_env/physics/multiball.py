@@ -354,7 +354,9 @@ def cross_lines(state, env, geometry, x, y, vx, vy, dt, start):
 # --- the step --------------------------------------------------------------------------------
 
 
-# Long by design, as step.step_ball: the hot loop of a multi-ball frame, written out.
+# Long by design, as step.step_ball: the hot loop of a multi-ball frame, written out, since
+# numba counts a reference to every array a compiled function receives, and helpers taking
+# arrays in the pass loop cost more than the physics.
 @njit(cache=True, inline="always")
 def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     """Advance env ``env`` by one frame in place with its M balls (``multi``'s rows): its
