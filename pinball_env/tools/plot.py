@@ -444,7 +444,7 @@ def plot_tilt(tables: list[Table], out: Path) -> Path:
     return out
 
 
-def main(argv: list[str] | None = None) -> Path:
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("table", nargs="?", default="box", help="table name or YAML path")
     parser.add_argument("--out", type=Path, default=Path("outputs/table.png"))
@@ -478,35 +478,37 @@ def main(argv: list[str] | None = None) -> Path:
         "--seeds", type=int, nargs=2, default=(0, 12), metavar=("FIRST", "COUNT"),
         help="the gallery's tables: COUNT seeds from FIRST (default: 0 12)",
     )  # fmt: skip
+    return parser
+
+
+def main(argv: list[str] | None = None) -> Path:
+    parser = _parser()
     args = parser.parse_args(argv)
-    if args.gallery:
-        first, count = args.seeds
-        if first < 0 or count < 1:
-            parser.error(f"--seeds needs FIRST >= 0 and COUNT >= 1, got {first} {count}")
-        tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
-        out = plot_gallery(tables, args.out, columns=min(count, 6))
-        print(f"wrote {out}")
-        return out
-    if args.rules:
-        out = plot_rules(load_any_table(args.table), args.out)
-        print(f"wrote {out}")
-        return out
-    if args.multiball:
-        out = plot_multiball(load_any_table(args.table), args.out)
-        print(f"wrote {out}")
-        return out
-    if args.tilt:
-        out = plot_tilt([load_any_table(name) for name in args.tilt], args.out)
-        print(f"wrote {out}")
-        return out
-    if args.cabinet:
-        out = plot_cabinet(load_any_table(args.table), args.out)
-        print(f"wrote {out}")
-        return out
-    velocity = tuple(args.velocity) if args.velocity else None
-    out = plot_table(load_any_table(args.table), args.out, args.trace, velocity)
+    if args.gallery and (args.seeds[0] < 0 or args.seeds[1] < 1):
+        parser.error(
+            f"--seeds needs FIRST >= 0 and COUNT >= 1, got {args.seeds[0]} {args.seeds[1]}"
+        )
+    out = _plot(args)
     print(f"wrote {out}")
     return out
+
+
+def _plot(args: argparse.Namespace) -> Path:
+    """The picture the arguments ask for (one kind, the first given of those below)."""
+    if args.gallery:
+        first, count = args.seeds
+        tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
+        return plot_gallery(tables, args.out, columns=min(count, 6))
+    if args.rules:
+        return plot_rules(load_any_table(args.table), args.out)
+    if args.multiball:
+        return plot_multiball(load_any_table(args.table), args.out)
+    if args.tilt:
+        return plot_tilt([load_any_table(name) for name in args.tilt], args.out)
+    if args.cabinet:
+        return plot_cabinet(load_any_table(args.table), args.out)
+    velocity = tuple(args.velocity) if args.velocity else None
+    return plot_table(load_any_table(args.table), args.out, args.trace, velocity)
 
 
 if __name__ == "__main__":
