@@ -15,6 +15,7 @@ every env at once (the single env is a batch of one).
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypedDict
 
 import numpy as np
 from gymnasium import spaces
@@ -111,9 +112,11 @@ def _flipper_rows(table: Table, norm: bool) -> list[_Row]:
 
 def _cabinet_rows(table: Table, norm: bool) -> list[_Row]:
     """The plunger, the cabinet's offset and velocity, the tilt (cabinet_observation)."""
+    plunger, tilt = table.plunger, table.tilt
+    assert plunger is not None and plunger.stroke is not None and tilt is not None
     offset, cabinet_speed = MAX_OBS_CABINET_OFFSET, MAX_OBS_CABINET_SPEED
     return [
-        ("plunger pull", 0.0, 1.0 if norm else table.plunger.stroke,
+        ("plunger pull", 0.0, 1.0 if norm else plunger.stroke,
          "strokes" if norm else "m"),
         ("ball waiting on the plunger (1) or not (0)", 0.0, 1.0, ""),
         (f"cabinet offset x (clipped to +-{offset:g})", -offset, offset, "m"),
@@ -122,7 +125,7 @@ def _cabinet_rows(table: Table, norm: bool) -> list[_Row]:
          cabinet_speed, "m/s"),
         (f"cabinet velocity y (clipped to +-{cabinet_speed:g})", -cabinet_speed,
          cabinet_speed, "m/s"),
-        ("tilt warnings standing", 0.0, table.tilt.warnings + 1.0, ""),
+        ("tilt warnings standing", 0.0, tilt.warnings + 1.0, ""),
         ("tilted (1) or not (0)", 0.0, 1.0, ""),
     ]  # fmt: skip
 
@@ -151,6 +154,14 @@ def _ray_rows(rays: int, sees_balls: bool) -> list[_Row]:
     sees = ", seeing other balls and standing drop targets" if sees_balls else ""
     return [(f"ray {k} distance (direction {360.0 * k / rays:.4g} deg from +x{sees})", 0.0, 1.0,
              f"{RAY_RANGE:g} m") for k in range(rays)]  # fmt: skip
+
+
+class _CabinetView(TypedDict, total=False):
+    """The cabinet's arguments of ``Renderer.frames`` (none for a table without a cabinet)."""
+
+    plunger_pull: np.ndarray
+    on_plunger: np.ndarray
+    cabinet_offset: np.ndarray
 
 
 class StateObserver:
@@ -225,7 +236,9 @@ class StateObserver:
                 block[:, 1::5] /= tables.height
             obs = np.concatenate([block, obs[:, 4:]], axis=1)
         if self.game.cabinet:
-            stroke = self.game.table.plunger.stroke if self.normalised else 1.0
+            plunger = self.game.table.plunger
+            assert plunger is not None and plunger.stroke is not None  # (the cabinet's)
+            stroke = plunger.stroke if self.normalised else 1.0
             cabinet = cabinet_observation(
                 game.plunger_pull / stroke, game.on_plunger, state.cabinet, game.tilt_warnings,
                 state.tilted,
@@ -250,6 +263,7 @@ class StateObserver:
         timers, counters, and 2 (multiplier, bonus)."""
         table = self.game.table
         rules = table.rules
+        assert rules is not None  # (a table with rules)
         return (len(rules.lights), len(table.drop_target_list), len(table.kickbacks),
                 len(rules.timers), len(rules.counters), 2)  # fmt: skip
 
@@ -333,7 +347,7 @@ class ImageObserver:
         world = self.game.world
         return {"other_balls": world.ball_states, "other_visible": world.ball_active}
 
-    def _cabinet(self, envs: slice) -> dict[str, np.ndarray]:
+    def _cabinet(self, envs: slice) -> _CabinetView:
         """The cabinet as the picture shows it (true scale): the plunger pulled back, a ball
         waiting on it, the cabinet's offset; nothing for a table without a cabinet."""
         if not self.game.cabinet:

@@ -693,7 +693,7 @@ def step_balls(geometry, settings, state, scratch, multi, mscratch, pair, env):
     return finite
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(cache=True, nogil=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def step_multiworld(geometry, settings, state, scratch, multi, mscratch, pair, moving, start, stop):
     """:func:`step_balls` for the envs from ``start`` to ``stop`` for which ``moving`` is set
     (``step.step_world``'s contract, with ``multi`` the balls). Returns the number of stepped

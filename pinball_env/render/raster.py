@@ -146,7 +146,7 @@ class Renderer:
         half-length [m], tip half-width [px]) and the scale of its drawn pull; (None, 1.0) for a
         table whose plunger the machine fires."""
         plunger = self.table.plunger
-        if plunger is None or not plunger.manual:
+        if plunger is None or plunger.stroke is None:  # (not plunger.manual)
             return None, 1.0
         scale = math.sqrt(self._view[0] * self._view[1])  # as the walls' widths
         radius = self.table.ball.radius
@@ -172,8 +172,8 @@ class Renderer:
             for segment in wall.segments():
                 paint_line(image, *segment, WALL_HALF_WIDTH * scale, rgb(colour), *view)
         for post in table.posts:
-            colour = rgb(KICKER if post.kick > 0 else POST)
-            paint_disc(image, *post.center, post.radius, colour, *view)
+            paint_disc(image, *post.center, post.radius, rgb(KICKER if post.kick > 0 else POST),
+                       *view)  # fmt: skip
         for target in table.standup_targets:
             paint_line(image, *target.segment, TARGET_HALF_WIDTH * scale, rgb(TARGET), *view)
         for line in (*table.spinners, *table.kickbacks):
@@ -273,7 +273,7 @@ class Renderer:
         )
         if targets is not None:
             self._paint_targets(pictures, targets, balls, visible, shifts, grayscale)
-        if other_balls is not None:
+        if other_balls is not None and other_visible is not None:
             self._paint_other_balls(pictures, other_balls, other_visible, shifts, grayscale)
         if not fills:
             out[...] = luminance(BACKGROUND) if grayscale else BACKGROUND
@@ -412,6 +412,7 @@ class Renderer:
             )
         pull = np.asarray(plunger_pull, dtype=np.float64).reshape(n)
         plunger = self.table.plunger
+        assert plunger is not None  # (self._plunger: the player's)
         drawn = np.clip(np.nan_to_num(pull), 0.0, plunger.stroke) * self.pull_scale
         return plunger.position[1] - self.table.ball.radius - drawn, drawn
 

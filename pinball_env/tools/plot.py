@@ -201,10 +201,10 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
     ax.set_axis_off()
     ax.set_title("lamps lit, targets down, the bonus and its multiplier", fontsize=9)
     ax = fig.add_subplot(grid[0, 1])
-    scores, rule_scores = np.array(scores), np.array(rule_scores)
-    ax.plot(times, scores, color="#1d3557", label="score")
-    ax.plot(times, scores - rule_scores, color="#2a9d8f", label="from hits")
-    ax.plot(times, rule_scores, color="#e76f51", label="from the rules (modes, awards, bonus)")
+    points, rule_points = np.array(scores), np.array(rule_scores)
+    ax.plot(times, points, color="#1d3557", label="score")
+    ax.plot(times, points - rule_points, color="#2a9d8f", label="from hits")
+    ax.plot(times, rule_points, color="#e76f51", label="from the rules (modes, awards, bonus)")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("points")
     ax.legend(fontsize=8, loc="upper left")
@@ -212,8 +212,8 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
     twin.step(times, multipliers, color="#f4a261", lw=0.8, where="post", alpha=0.7)
     twin.set_ylabel("bonus multiplier", color="#f4a261")
     twin.set_ylim(0.5, table.rules.max_multiplier + 0.5)
-    ax.set_title(f"the heuristic's game (seed {seed}): {scores[-1]} points, "
-                 f"{rule_scores[-1]} from the rules", fontsize=9)  # fmt: skip
+    ax.set_title(f"the heuristic's game (seed {seed}): {points[-1]} points, "
+                 f"{rule_points[-1]} from the rules", fontsize=9)  # fmt: skip
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=90, bbox_inches="tight")
@@ -266,6 +266,7 @@ def multiball_game(
         if in_play > best or (in_play == best and since == MULTIBALL_SETTLE_FRAMES):
             best, frame = in_play, env.render()
     env.close()
+    assert frame is not None  # (the first step's, with at least 0 > -1 balls in play)
     return {key: np.array(values) for key, values in trace.items()}, frame
 
 
@@ -322,8 +323,11 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     plunge beside a whole stroke, one nudge (the cabinet's offset and the ball's velocity
     relative to the table), and the plumb bob under nudges left and right in a rhythm, with
     its ring, the warnings and the tilt."""
-    if not table.has_cabinet:
+    plunger = table.plunger
+    if not table.has_cabinet or plunger is None or plunger.pull_time is None:
         raise ValueError(f"table {table.name!r} has no cabinet")
+    if plunger.skill_shot is None:
+        raise ValueError(f"table {table.name!r} has no skill shot")
     from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
 
     plt = _pyplot()
@@ -332,18 +336,19 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     ax = fig.add_subplot(grid[:, 0])
     draw_table(ax, table, labels=False)
     rate = table.simulation.frame_rate
-    pull_frames = round(table.plunger.pull_time * rate)
+    pull_frames = round(plunger.pull_time * rate)
     for frames, colour in ((pull_frames - 4, "#2a9d8f"), (pull_frames, "#e76f51")):
         env = PinballEnv(table=table)
         env.reset(seed=0)
         path, speed = [], 0.0
-        for step in range(frames + round(table.plunger.skill_shot.time * rate)):
+        for step in range(frames + round(plunger.skill_shot.time * rate)):
             _, _, _, _, info = env.step(4 if step < frames else 0)
             path.append(info["ball_position"])
             if step == frames:  # the launch, one frame of gravity ago
                 speed = info["ball_velocity"][1] - table.gravity_vector[1] / rate
-        path = np.array(path)
-        ax.plot(*path.T, color=colour, lw=1.2, label=f"pull {frames} frames: {speed:.2f} m/s")
+        ax.plot(
+            *np.array(path).T, color=colour, lw=1.2, label=f"pull {frames} frames: {speed:.2f} m/s"
+        )
     ax.legend(loc="lower left", fontsize=7)
     ax.set_title("the plunger: the skill shot and a whole stroke", fontsize=9)
 
@@ -411,13 +416,15 @@ def bob_trace(table: Table, action: Callable[[int], int], frames: int) -> dict[s
 def draw_bob(ax, table: Table, trace: dict[str, np.ndarray]) -> None:
     """Draw a :func:`bob_trace` on ``ax``: the bob's angle, its ring, the warnings, the tilts."""
     times, tilts = trace["time"], trace["tilted"]
+    assert table.tilt is not None  # (a table with a cabinet)
+    ring = table.tilt.ring_angle
     ax.plot(times, trace["angle"], color="#1d3557", label="plumb bob's angle [deg]")
-    ax.axhline(table.tilt.ring_angle, color="#e63946", ls="--", lw=0.8, label="the ring")
+    ax.axhline(ring, color="#e63946", ls="--", lw=0.8, label="the ring")
     ax.step(times, trace["warnings"], color="#f4a261", where="post", label="warnings")
     for t, tilted, before in zip(times, tilts, [False, *tilts], strict=False):
         if tilted and not before:  # a tilt: the ball lost, the next one served
             ax.axvline(t, color="#e63946", lw=2, alpha=0.5)
-            ax.text(t, table.tilt.ring_angle * 1.05, " TILT", color="#e63946", fontsize=8)
+            ax.text(t, ring * 1.05, " TILT", color="#e63946", fontsize=8)
     ax.set_xlabel("time [s]")
     ax.legend(fontsize=7, loc="upper left")
 

@@ -44,6 +44,7 @@ from urllib.parse import urlsplit
 
 import gymnasium as gym
 
+from pinball_env.envs import unwrapped_pinball
 from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import ENV_IDS as PROTOCOL_ENV_IDS
@@ -359,7 +360,7 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
 
         def heuristic() -> WatchedPlayer:
             env = gym.make(env_id, **options)
-            policy = HeuristicPolicy(env.unwrapped.table)
+            policy = HeuristicPolicy(unwrapped_pinball(env).table)
             return WatchedPlayer(env, lambda obs, info: policy(info), policy.reset)
 
         def watch() -> Session:

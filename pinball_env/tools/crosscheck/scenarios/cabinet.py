@@ -42,6 +42,7 @@ def nudge_free_flight(frames: int = 20) -> list:
     """A ball in free flight over the classic_v1 playfield when the cabinet is nudged: relative
     to the table it must change velocity by the cabinet's change, opposite (beside gravity)."""
     table = load_table(CABINET_TABLE)
+    assert table.cabinet is not None
     impulse, gravity = table.cabinet.nudge_impulse, np.array(table.gravity_vector)
     start, velocity = (0.25, 0.42), np.array([0.1, 0.5])  # clear of everything for 20 frames
     rows = []
@@ -122,6 +123,7 @@ def nudge_contact() -> list:
     rows = []
     for situation, (make_table, setup, settle, normal, restitution) in NUDGE_SITUATIONS.items():
         table = make_table()
+        assert table.cabinet is not None
         impulse, mass = table.cabinet.nudge_impulse, table.cabinet.mass
         gravity = np.array(table.gravity_vector)
         for name, direction in NUDGE_DIRECTIONS.items():
@@ -174,6 +176,7 @@ def plunger_launches(pulls: list[float]) -> list:
     """
     table = load_table(CABINET_TABLE)
     plunger = table.plunger
+    assert plunger is not None and plunger.stroke is not None  # (the player's)
     g = -table.gravity_vector[1]
     y0 = plunger.position[1]
     gate_y = next(wall for wall in table.walls if wall.name == "gate").points[0][1]
@@ -188,7 +191,7 @@ def plunger_launches(pulls: list[float]) -> list:
             "speed": speed,
             "apex": None if crosses else y0 + speed * speed / (2.0 * g),
             "gate_time": expected_time,
-            "gate_speed": None if not crosses else speed - g * expected_time,
+            "gate_speed": None if expected_time is None else speed - g * expected_time,
         }
         if crosses:
             row["gate_time_tolerance"] = SUBSTEP / 2.0

@@ -111,11 +111,14 @@ def flipper_drop(heights: list[float]) -> list:
             # Speed right after the first bounce: rerun to the frame after the contact.
             world = make_world(table, 1, engine)
             world.place_ball(0, tuple(start), (0.0, 0.0))
-            frames = int(shots[engine].contact_time * FRAME_RATE) + 1
+            landed = shots[engine].contact_time
+            assert landed is not None, f"{engine}: the dropped ball never landed"
+            frames = int(landed * FRAME_RATE) + 1
             for _ in range(frames):
                 world.step()
             shots[engine].velocity = world.balls[0, [BALL_VX, BALL_VY]].copy()
         swept, pym = shots["swept"], shots["pymunk"]
+        assert swept.contact_time is not None and pym.contact_time is not None  # (landed)
         speed = lambda shot: float(np.linalg.norm(shot.velocity))  # noqa: E731
         rows.append(
             {
@@ -141,9 +144,10 @@ def flipper_swing(alongs: list[float]) -> list:
     omega = math.radians(abs(FLIPPER["up_angle"] - FLIPPER["rest_angle"])) / FLIPPER["stroke_time"]
     buttons = LEFT_BUTTON
     for along in alongs:
-        gap = flipper_distance(*(pivot + along * axis + 0.05 * normal), *pivot,
-                               FLIPPER["length"], FLIPPER["base_radius"], FLIPPER["tip_radius"],
-                               angle)[0] - 0.05  # fmt: skip
+        x, y = pivot + along * axis + 0.05 * normal
+        gap = flipper_distance(x, y, pivot[0], pivot[1], FLIPPER["length"],
+                               FLIPPER["base_radius"], FLIPPER["tip_radius"], angle)[0]  # fmt: skip
+        gap -= 0.05
         start = pivot + along * axis + (RADIUS - gap + 1e-4) * normal
         speeds = {}
         for engine in ENGINES:
@@ -228,7 +232,7 @@ def tunnelling(speeds: list[float], trials: int, seed: int = 0) -> dict[str, Any
     for name, (table, origin, along, shot_normal, line_point, end_normal, span, tilt_max,
                buttons, arrival) in targets.items():  # fmt: skip
         worlds = {engine: make_world(table, 1, engine) for engine in ENGINES}
-        passed = {engine: [] for engine in ENGINES}
+        passed: dict[str, list[float]] = {engine: [] for engine in ENGINES}
         for speed in speeds:
             counts = dict.fromkeys(ENGINES, 0)
             for _ in range(trials):
