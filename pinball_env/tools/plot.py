@@ -351,27 +351,7 @@ def plot_cabinet(table: Table, out: Path) -> Path:
         )
     ax.legend(loc="lower left", fontsize=7)
     ax.set_title("the plunger: the skill shot and a whole stroke", fontsize=9)
-
-    env = PinballEnv(table=table)
-    # A ball in free flight in the middle of the table.
-    env.reset(seed=0, options={"ball_position": [0.24, 0.42], "ball_velocity": [0.0, 0.3]})
-    game = env.game
-    times, offsets, relative = [], [], []
-    velocity0 = game.world.balls[0, 2]
-    for step in range(24):
-        env.step(8 if step == 5 else 0)  # one nudge left
-        times.append(step / rate)
-        offsets.append(1000 * game.world.state.cabinet[0, 0])
-        relative.append(game.world.balls[0, 2] - velocity0)
-    ax = fig.add_subplot(grid[0, 1])
-    ax.plot(times, offsets, color="#1d3557", label="cabinet offset x [mm]")
-    ax.plot(times, np.array(relative) * 10, color="#e63946",
-            label="ball vx relative to the table x10 [m/s]")  # fmt: skip
-    ax.axhline(0, color="#8d99ae", lw=0.5)
-    ax.legend(fontsize=7)
-    ax.set_title("one NUDGE_LEFT on a ball in free flight: the table moves left under it, "
-                 "and back", fontsize=9)  # fmt: skip
-
+    draw_nudge(fig.add_subplot(grid[0, 1]), table)
     ax = fig.add_subplot(grid[1, 1])
     draw_bob(ax, table, bob_trace(table, lambda step: 8 if (step // 15) % 2 == 0 else 16, 150))
     ax.set_title("nudges left and right every 0.25 s: warnings, then the tilt", fontsize=9)
@@ -380,6 +360,31 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     fig.savefig(out, dpi=90, bbox_inches="tight")
     plt.close(fig)
     return out
+
+
+def draw_nudge(ax, table: Table) -> None:
+    """Draw one NUDGE_LEFT on a ball in free flight on ``ax``: the cabinet's offset and the
+    ball's velocity relative to the table."""
+    from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
+
+    env = PinballEnv(table=table)
+    # A ball in free flight in the middle of the table.
+    env.reset(seed=0, options={"ball_position": [0.24, 0.42], "ball_velocity": [0.0, 0.3]})
+    game, rate = env.game, table.simulation.frame_rate
+    times, offsets, relative = [], [], []
+    velocity0 = game.world.balls[0, 2]
+    for step in range(24):
+        env.step(8 if step == 5 else 0)  # one nudge left
+        times.append(step / rate)
+        offsets.append(1000 * game.world.state.cabinet[0, 0])
+        relative.append(game.world.balls[0, 2] - velocity0)
+    ax.plot(times, offsets, color="#1d3557", label="cabinet offset x [mm]")
+    ax.plot(times, np.array(relative) * 10, color="#e63946",
+            label="ball vx relative to the table x10 [m/s]")  # fmt: skip
+    ax.axhline(0, color="#8d99ae", lw=0.5)
+    ax.legend(fontsize=7)
+    ax.set_title("one NUDGE_LEFT on a ball in free flight: the table moves left under it, "
+                 "and back", fontsize=9)  # fmt: skip
 
 
 # The nudges of the tilt's patterns by discrete action (see ``game.actions``).
