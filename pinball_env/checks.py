@@ -10,7 +10,7 @@ file and the key in ``NAME`` (``"run.yaml: env.num_envs:"``).
 from collections.abc import Sequence
 from typing import NoReturn
 
-from pinball_env.table.fields import is_finite, is_flag, is_int, is_real
+from pinball_env.table.fields import Real, is_finite, is_flag, is_int, is_real
 
 __all__ = [
     "choice",
@@ -75,8 +75,8 @@ def choice(name: str, value: object, choices: Sequence[object]) -> None:
         must_be(name, f"one of {', '.join(map(repr, choices))}", value)
 
 
-def _within(value: int, low: int | None, high: int | None) -> bool:
-    return (low is None or value >= low) and (high is None or value <= high)
+def _within(value: Real, low: int | None, high: int | None) -> bool:
+    return bool((low is None or value >= low) and (high is None or value <= high))
 
 
 def _range(low: int | None, high: int | None) -> str:

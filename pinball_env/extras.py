@@ -40,7 +40,7 @@ def missing_message(module: str) -> str:
 def require(*modules: str) -> ModuleType:
     """Import ``modules`` (names in :data:`OPTIONAL`), returning the last; raise
     :class:`MissingDependency` naming the first one missing."""
-    imported = None
+    imported: ModuleType | None = None
     for module in modules:
         if module not in OPTIONAL:
             raise KeyError(f"{module!r} is not a declared optional dependency")
@@ -48,4 +48,6 @@ def require(*modules: str) -> ModuleType:
             imported = importlib.import_module(module)
         except ImportError as error:
             raise MissingDependency(missing_message(module)) from error
+    if imported is None:
+        raise TypeError("require() needs the name of a module")
     return imported

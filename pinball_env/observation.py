@@ -15,6 +15,7 @@ every env at once (the single env is a batch of one).
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypedDict
 
 import numpy as np
 from gymnasium import spaces
@@ -35,6 +36,7 @@ from pinball_env.physics.rays import RAY_RANGE, cast_all_rays
 from pinball_env.render import Renderer, TargetsView
 from pinball_env.sim.tables import flipper_numbers
 from pinball_env.table import Table
+from pinball_env.table.rules import RuleSet
 
 # The state observation clips ball velocities to +-MAX_OBS_SPEED [m/s] so its bounds hold; a
 # real ball rarely exceeds 10 m/s on a table (a full flip at the tip gives about 5 m/s).
@@ -69,6 +71,99 @@ def flipper_names(table: Table) -> list[str]:
             else f"flipper {f.name} ({f.button} button)" for f in table.flippers]  # fmt: skip
 
 
+# A row of StateObserver.rows before its bounds are made float32: meaning, low, high, unit.
+_Row = tuple[str, float, float, str]
+
+
+def _ball_rows(table: Table, norm: bool) -> list[_Row]:
+    """One ball: its block; several (a trough): a block per ball slot, in slot order, each with
+    its flag (balls_observation)."""
+    speed = MAX_OBS_SPEED
+    n_balls = table.n_balls
+    rows: list[_Row] = []
+    for i in range(n_balls):
+        ball = "ball" if n_balls == 1 else f"ball {i}"
+        rows += [
+            (f"{ball} x", 0.0, 1.0 if norm else table.width, "table widths" if norm else "m"),
+            (f"{ball} y (up the table)", 0.0, 1.0 if norm else table.height,
+             "table heights" if norm else "m"),
+            (f"{ball} vx (clipped to +-{speed:g})", -speed, speed, "m/s"),
+            (f"{ball} vy (clipped to +-{speed:g})", -speed, speed, "m/s"),
+        ]  # fmt: skip
+        if n_balls > 1:
+            rows.append((f"{ball} in play (1: on the table or the player's plunger), held in "
+                         "a lock or saucer (0.5) or in the trough (0; x, y, vx, vy 0)", 0.0,
+                         1.0, ""))  # fmt: skip
+    return rows
+
+
+def _flipper_rows(table: Table, norm: bool) -> list[_Row]:
+    """Each flipper's angle above rest, then each one's angular velocity."""
+    _, _, swing, top_speed = flipper_numbers(table)
+    names = flipper_names(table)
+    rows: list[_Row] = [(f"{name} angle above rest", 0.0, 1.0 if norm else top,
+                         "swings" if norm else "rad")
+                        for name, top in zip(names, swing, strict=True)]  # fmt: skip
+    rows += [(f"{name} angular velocity, + going up", -1.0 if norm else -top,
+              1.0 if norm else top, "top speeds" if norm else "rad/s")
+             for name, top in zip(names, top_speed, strict=True)]  # fmt: skip
+    return rows
+
+
+def _cabinet_rows(table: Table, norm: bool) -> list[_Row]:
+    """The plunger, the cabinet's offset and velocity, the tilt (cabinet_observation)."""
+    plunger, tilt = table.plunger, table.tilt
+    assert plunger is not None and plunger.stroke is not None and tilt is not None
+    offset, cabinet_speed = MAX_OBS_CABINET_OFFSET, MAX_OBS_CABINET_SPEED
+    return [
+        ("plunger pull", 0.0, 1.0 if norm else plunger.stroke,
+         "strokes" if norm else "m"),
+        ("ball waiting on the plunger (1) or not (0)", 0.0, 1.0, ""),
+        (f"cabinet offset x (clipped to +-{offset:g})", -offset, offset, "m"),
+        (f"cabinet offset y, up the table (clipped to +-{offset:g})", -offset, offset, "m"),
+        (f"cabinet velocity x (clipped to +-{cabinet_speed:g})", -cabinet_speed,
+         cabinet_speed, "m/s"),
+        (f"cabinet velocity y (clipped to +-{cabinet_speed:g})", -cabinet_speed,
+         cabinet_speed, "m/s"),
+        ("tilt warnings standing", 0.0, tilt.warnings + 1.0, ""),
+        ("tilted (1) or not (0)", 0.0, 1.0, ""),
+    ]  # fmt: skip
+
+
+def _rule_rows(table: Table, rules: RuleSet) -> list[_Row]:
+    """Lights, drop targets, kickbacks, timers, counters, multiplier, bonus (rule_observation)."""
+    count = f"(clipped to {MAX_OBS_COUNT:g})"
+    rows: list[_Row] = [(f"light {x.name} lit (1) or not (0)", 0.0, 1.0, "") for x in rules.lights]
+    rows += [(f"drop target {x.name} up (1) or down (0)", 0.0, 1.0, "")
+             for x in table.drop_target_list]  # fmt: skip
+    rows += [(f"kickback {x.name} lit (1) or not (0)", 0.0, 1.0, "")
+             for x in table.kickbacks]  # fmt: skip
+    rows += [(f"timer {x.name}: share of its {x.time:g} s left", 0.0, 1.0, "")
+             for x in rules.timers]  # fmt: skip
+    rows += [(f"counter {x} {count}", 0.0, MAX_OBS_COUNT, "") for x in rules.counters]
+    rows += [
+        ("bonus multiplier", 1.0, float(rules.max_multiplier), "x"),
+        (f"end-of-ball bonus, in thousands (clipped to {MAX_OBS_BONUS:g})", 0.0,
+         MAX_OBS_BONUS, "1000 points"),
+    ]  # fmt: skip
+    return rows
+
+
+def _ray_rows(rays: int, sees_balls: bool) -> list[_Row]:
+    """The ray distances, evenly round the circle from +x (as ray_directions)."""
+    sees = ", seeing other balls and standing drop targets" if sees_balls else ""
+    return [(f"ray {k} distance (direction {360.0 * k / rays:.4g} deg from +x{sees})", 0.0, 1.0,
+             f"{RAY_RANGE:g} m") for k in range(rays)]  # fmt: skip
+
+
+class _CabinetView(TypedDict, total=False):
+    """The cabinet's arguments of ``Renderer.frames`` (none for a table without a cabinet)."""
+
+    plunger_pull: np.ndarray
+    on_plunger: np.ndarray
+    cabinet_offset: np.ndarray
+
+
 class StateObserver:
     """The state observation of every env of ``game`` (see ``PinballEnv``'s Observation Space).
 
@@ -95,75 +190,19 @@ class StateObserver:
         """One env's observation, entry by entry in order: what each is, its bounds and unit.
         The one declaration of the bounds (:meth:`bounds` reads them from here), so that the
         documentation's table of them is the space itself."""
-        table, balls = self.game.table, float(self.game.balls_per_game)
-        norm = self.normalised
-        _, _, swing, top_speed = flipper_numbers(table)
-        speed = MAX_OBS_SPEED
-        # One ball: its block; several (a trough): a block per ball slot, in slot order, each
-        # with its flag (balls_observation).
-        n_balls = table.n_balls
-        rows = []
-        for i in range(n_balls):
-            ball = "ball" if n_balls == 1 else f"ball {i}"
-            rows += [
-                (f"{ball} x", 0.0, 1.0 if norm else table.width, "table widths" if norm else "m"),
-                (f"{ball} y (up the table)", 0.0, 1.0 if norm else table.height,
-                 "table heights" if norm else "m"),
-                (f"{ball} vx (clipped to +-{speed:g})", -speed, speed, "m/s"),
-                (f"{ball} vy (clipped to +-{speed:g})", -speed, speed, "m/s"),
-            ]  # fmt: skip
-            if n_balls > 1:
-                rows.append((f"{ball} in play (1: on the table or the player's plunger), held in "
-                             "a lock or saucer (0.5) or in the trough (0; x, y, vx, vy 0)", 0.0,
-                             1.0, ""))  # fmt: skip
-        names = flipper_names(table)
-        rows += [(f"{name} angle above rest", 0.0, 1.0 if norm else top,
-                  "swings" if norm else "rad")
-                 for name, top in zip(names, swing, strict=True)]  # fmt: skip
-        rows += [(f"{name} angular velocity, + going up", -1.0 if norm else -top,
-                  1.0 if norm else top, "top speeds" if norm else "rad/s")
-                 for name, top in zip(names, top_speed, strict=True)]  # fmt: skip
-        rows += [
+        table, norm = self.game.table, self.normalised
+        rows = [
+            *_ball_rows(table, norm),
+            *_flipper_rows(table, norm),
             ("ball in play (1) or game over (0)", 0.0, 1.0, ""),
-            ("balls left, the one in play included", 0.0, balls, ""),
+            ("balls left, the one in play included", 0.0, float(self.game.balls_per_game), ""),
         ]
         if self.game.cabinet:  # as cabinet_observation
-            offset, cabinet_speed = MAX_OBS_CABINET_OFFSET, MAX_OBS_CABINET_SPEED
-            rows += [
-                ("plunger pull", 0.0, 1.0 if norm else table.plunger.stroke,
-                 "strokes" if norm else "m"),
-                ("ball waiting on the plunger (1) or not (0)", 0.0, 1.0, ""),
-                (f"cabinet offset x (clipped to +-{offset:g})", -offset, offset, "m"),
-                (f"cabinet offset y, up the table (clipped to +-{offset:g})", -offset, offset, "m"),
-                (f"cabinet velocity x (clipped to +-{cabinet_speed:g})", -cabinet_speed,
-                 cabinet_speed, "m/s"),
-                (f"cabinet velocity y (clipped to +-{cabinet_speed:g})", -cabinet_speed,
-                 cabinet_speed, "m/s"),
-                ("tilt warnings standing", 0.0, table.tilt.warnings + 1.0, ""),
-                ("tilted (1) or not (0)", 0.0, 1.0, ""),
-            ]  # fmt: skip
-        rules = table.rules
-        if rules is not None:  # as rule_observation
-            count = f"(clipped to {MAX_OBS_COUNT:g})"
-            rows += [(f"light {x.name} lit (1) or not (0)", 0.0, 1.0, "") for x in rules.lights]
-            rows += [(f"drop target {x.name} up (1) or down (0)", 0.0, 1.0, "")
-                     for x in table.drop_target_list]  # fmt: skip
-            rows += [(f"kickback {x.name} lit (1) or not (0)", 0.0, 1.0, "")
-                     for x in table.kickbacks]  # fmt: skip
-            rows += [(f"timer {x.name}: share of its {x.time:g} s left", 0.0, 1.0, "")
-                     for x in rules.timers]  # fmt: skip
-            rows += [(f"counter {x} {count}", 0.0, MAX_OBS_COUNT, "") for x in rules.counters]
-            rows += [
-                ("bonus multiplier", 1.0, float(rules.max_multiplier), "x"),
-                (f"end-of-ball bonus, in thousands (clipped to {MAX_OBS_BONUS:g})", 0.0,
-                 MAX_OBS_BONUS, "1000 points"),
-            ]  # fmt: skip
+            rows += _cabinet_rows(table, norm)
+        if table.rules is not None:  # as rule_observation
+            rows += _rule_rows(table, table.rules)
         # Several balls: the rays also see the other balls and the standing drop targets.
-        sees = ", seeing other balls and standing drop targets" if self.game.multi else ""
-        for k in range(self.rays):  # as ray_directions: evenly round the circle from +x
-            direction = 360.0 * k / self.rays
-            rows.append((f"ray {k} distance (direction {direction:.4g} deg from +x{sees})", 0.0,
-                         1.0, f"{RAY_RANGE:g} m"))  # fmt: skip
+        rows += _ray_rows(self.rays, sees_balls=bool(self.game.multi))
         # The bounds as the float32 space holds them, so that a row is exactly the space's.
         return tuple(
             ObservationRow(meaning, float(np.float32(low)), float(np.float32(high)), unit)
@@ -200,7 +239,9 @@ class StateObserver:
                 block[:, 1::5] /= tables.height
             obs = np.concatenate([block, obs[:, 4:]], axis=1)
         if self.game.cabinet:
-            stroke = self.game.table.plunger.stroke if self.normalised else 1.0
+            plunger = self.game.table.plunger
+            assert plunger is not None and plunger.stroke is not None  # (the cabinet's)
+            stroke = plunger.stroke if self.normalised else 1.0
             cabinet = cabinet_observation(
                 game.plunger_pull / stroke, game.on_plunger, state.cabinet, game.tilt_warnings,
                 state.tilted,
@@ -231,6 +272,7 @@ class StateObserver:
         timers, counters, and 2 (multiplier, bonus)."""
         table = self.game.table
         rules = table.rules
+        assert rules is not None  # (a table with rules)
         return (len(rules.lights), len(table.drop_target_list), len(table.kickbacks),
                 len(rules.timers), len(rules.counters), 2)  # fmt: skip
 
@@ -315,7 +357,7 @@ class ImageObserver:
         world = self.game.world
         return {"other_balls": world.balls, "other_visible": world.active}
 
-    def _cabinet(self, envs: slice) -> dict[str, np.ndarray]:
+    def _cabinet(self, envs: slice) -> _CabinetView:
         """The cabinet as the picture shows it (true scale): the plunger pulled back, a ball
         waiting on it, the cabinet's offset; nothing for a table without a cabinet."""
         if not self.game.cabinet:

@@ -56,13 +56,12 @@ def _table(name: str, value: object) -> object:
 
 def _image_size(name: str, size: object) -> tuple[int, int]:
     pair = (size, size) if checks.is_int(size) else size
-    valid = (
+    if not (
         isinstance(pair, (tuple, list))
         and len(pair) == 2
         and all(checks.is_int(n) for n in pair)
         and min(pair) >= 16
-    )
-    if not valid:
+    ):
         raise ValueError(f"{name} must be an int or (height, width) ints, each >= 16, got {size!r}")
     return int(pair[0]), int(pair[1])
 

@@ -43,7 +43,7 @@ import os
 import re
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import gymnasium as gym
 
@@ -150,7 +150,9 @@ def make_recorded_env(
     for key in RECORDING_FIXED_OPTIONS:
         if key in options:
             raise ValueError(f"the play tool sets {key} itself; do not pass it as an option")
-    kwargs = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
+    kwargs: dict[str, Any] = (
+        {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
+    )
     return gym.make(env_id, render_mode="rgb_array", **kwargs, **options)
 
 
@@ -291,15 +293,39 @@ def replay(recording: Recording, viewer: Viewer | None = None) -> list[int]:
         env.close()
 
 
+@runtime_checkable
+class _PlaysATable(Protocol):
+    """An env that says which table it plays (``PinballEnv.table``)."""
+
+    @property
+    def table(self) -> Table: ...
+
+
+def played_table(env: gym.Env) -> Table:
+    """The table that ``env``, a Pinball env under its wrappers, plays."""
+    core = env.unwrapped
+    if not isinstance(core, _PlaysATable):
+        raise RecordingError(f"{type(core).__name__} is not a Pinball env: it plays no table")
+    return core.table
+
+
+def action_count(env: gym.Env) -> int:
+    """How many actions ``env`` takes: a recorded env's are discrete (``FIXED_OPTIONS``)."""
+    space = env.action_space
+    if not isinstance(space, gym.spaces.Discrete):
+        raise RecordingError(f"recordings hold discrete actions, not those of {space}")
+    return int(space.n)
+
+
 def _check_table(recording: Recording, env: gym.Env) -> None:
     """RecordingError unless ``env`` plays the recorded table with every recorded action."""
     table = recording.options.get("table", default_table(recording.env_id))
-    if table_sha256(env.unwrapped.table) != recording.table_sha256:
+    if table_sha256(played_table(env)) != recording.table_sha256:
         raise RecordingError(
             f"the table {table!r} is not the recorded one (its file has changed since): not "
             "replayed"
         )
-    n_actions = env.action_space.n
+    n_actions = action_count(env)
     for index, game in enumerate(recording.games):
         for step, action in enumerate(decode_recorded_actions(game.actions)):
             if action >= n_actions:

@@ -4,7 +4,7 @@ batch), both thin shells over ``PinballCore`` (the game, its table source, its o
 
 from pinball_env.envs.core import PinballCore
 from pinball_env.envs.layouts import Layouts, frame_size, layout_table
-from pinball_env.envs.single import PinballEnv
+from pinball_env.envs.single import PinballEnv, unwrapped_pinball
 from pinball_env.envs.vector import EnvAttribute, PinballVectorEnv, default_threads
 
 __all__ = [
@@ -16,4 +16,5 @@ __all__ = [
     "default_threads",
     "frame_size",
     "layout_table",
+    "unwrapped_pinball",
 ]

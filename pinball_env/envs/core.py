@@ -4,7 +4,7 @@ source, its observer and its frames, and starts new games; ``PinballEnv`` (N = 1
 """
 
 import functools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -61,7 +61,7 @@ class PinballCore:
         threads = num_threads if options.physics == "swept" else 1
         self.game = Game(table, n_envs, options, threads)
         self.observer = make_observer(
-            self.game, options.obs_type, options.image_size, options.generated, options.rays
+            self.game, options.obs_type, image_shape(options), options.generated, options.rays
         )
         if options.action_type == "discrete":
             self.action_space: spaces.Space = spaces.Discrete(len(self.game.discrete_buttons))
@@ -69,6 +69,7 @@ class PinballCore:
             self.action_space = spaces.MultiBinary(len(self.game.button_names))
         self.steps_per_second = table.simulation.frame_rate / options.frame_skip
         # The frames render() shows: of one size for every layout of generated tables.
+        make: Callable[[Table], Renderer]
         if options.generated:
             width, height = frame_size(options.difficulty)
             make = functools.partial(FrameRenderer, width=width, height=height)
@@ -95,7 +96,7 @@ class PinballCore:
 
     def new_games(
         self,
-        envs: Sequence[int],
+        envs: Sequence[int] | np.ndarray,
         rngs: Sequence[np.random.Generator],
         options: Mapping[str, Any] | None = None,
     ) -> None:
@@ -112,15 +113,17 @@ class PinballCore:
                 layout, table = tables[env]
                 if table is not self.game.world.table_of(env):
                     self.game.set_table(env, table)
+                assert self.layout is not None  # (tables: generated ones)
                 self.layout[env] = layout
             self.game.new_game(env, rngs[env], options)
 
     def _layout_tables(
-        self, envs: Sequence[int], rngs: Sequence[np.random.Generator], chosen: Any
+        self, envs: Sequence[int] | np.ndarray, rngs: Sequence[np.random.Generator], chosen: Any
     ) -> dict[int, tuple[int, Table]]:
         """Each env's next layout and its table. Every env's layout first (each drawn from the
         env's own generator, before its game's launch, as one env at a time would), so that
         their tables are generated together."""
+        assert self.layouts is not None  # (generated tables)
         if isinstance(chosen, (Sequence, np.ndarray)) and not isinstance(chosen, str):
             if len(chosen) != self.n_envs:
                 raise ValueError(
@@ -175,6 +178,7 @@ class PinballCore:
                                **rules)  # fmt: skip
             return np.concatenate([playfield, board], axis=1)
         info = game.info(env)  # "tilted" holds a tilt of the last step that ended at once
+        assert table.tilt is not None  # (game.cabinet)
         playfield = renderer.frame(
             ball,
             angles,
@@ -227,7 +231,7 @@ class CoreAttributes:
 
     @property
     def image_size(self) -> tuple[int, int]:
-        return self.core.options.image_size
+        return image_shape(self.core.options)
 
     @property
     def rays(self) -> int:
@@ -255,6 +259,13 @@ class CoreAttributes:
     def height_shaping(self) -> float:
         """Weight of the height shaping term (the game's)."""
         return self.game.height_shaping
+
+
+def image_shape(options: PinballOptions) -> tuple[int, int]:
+    """``options.image_size`` as (height, width): its check makes an int a square's pair."""
+    size = options.image_size
+    assert isinstance(size, tuple)
+    return size
 
 
 def full_size_renderer(table: Table) -> Renderer:

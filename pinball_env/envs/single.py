@@ -64,7 +64,8 @@ class PinballEnv(CoreAttributes, gym.Env):
       every game as it was.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 60}
+    # Gymnasium's Env declares it an instance variable (each env sets its own render_fps).
+    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 60}  # noqa: RUF012
     # The keyboard's flipper buttons (pygame key names), by button: get_keys_to_action's map,
     # which gymnasium.utils.play and python -m pinball_env.tools.play both use.
     FLIPPER_KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
@@ -214,3 +215,11 @@ class PinballEnv(CoreAttributes, gym.Env):
     def layout(self) -> int | None:
         """The layout of the game (generated tables), else None."""
         return None if self.core.layout is None else int(self.core.layout[0])
+
+
+def unwrapped_pinball(env: gym.Env) -> PinballEnv:
+    """The :class:`PinballEnv` under ``env``'s wrappers (``env.unwrapped``, checked)."""
+    core = env.unwrapped
+    if not isinstance(core, PinballEnv):
+        raise TypeError(f"expected a Pinball env, got {type(core).__name__}")
+    return core

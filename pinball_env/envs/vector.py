@@ -6,9 +6,9 @@ and kernel (physics) as the single env, over N envs in one call, on ``num_thread
 
 import functools
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from gymnasium.error import ResetNeeded
@@ -124,7 +124,8 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
     ``call_env`` of a method of the vector env are ValueErrors (they are not one env's).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {
+    # Gymnasium's VectorEnv declares it an instance variable (each env sets its own render_fps).
+    metadata: dict[str, Any] = {  # noqa: RUF012
         "render_modes": ["rgb_array"],
         "render_fps": 60,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
@@ -179,7 +180,9 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
         if "reset_mask" in options:
             envs = np.flatnonzero(self._check_mask(options.pop("reset_mask")))
         # Made first, so that a bad seed (gymnasium.error.Error) changes nothing.
-        generators = {env: seeding.np_random(seeds[env]) for env in envs if seeds[env] is not None}
+        generators = {
+            int(env): seeding.np_random(seeds[env]) for env in envs if seeds[env] is not None
+        }
         for env, (rng, env_seed) in generators.items():
             self._rngs[env], self._seeds[env] = rng, env_seed
         if generators:
@@ -233,7 +236,7 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
         each the frame of the single env."""
         if self.render_mode is None:
             return None
-        return tuple(self._render_env(env) for env in range(self.num_envs))
+        return tuple(self.core.frame(env) for env in range(self.num_envs))
 
     def close_extras(self, **kwargs: Any) -> None:
         """Stop the threads that step the envs and generate tables (none if the constructor
@@ -241,13 +244,14 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
         if hasattr(self, "core"):
             self.core.close()
 
-    @property
-    def np_random(self) -> tuple[np.random.Generator, ...]:
+    # One generator, and one seed, per env (as gymnasium's SyncVectorEnv): not VectorEnv's one.
+    @property  # type: ignore[misc]  # read-only: set_attr sets one env's
+    def np_random(self) -> tuple[np.random.Generator, ...]:  # type: ignore[override]
         """Every env's random generator (set one with ``set_attr("np_random", ...)``)."""
         return tuple(self._rngs)
 
     @property
-    def np_random_seed(self) -> tuple[int, ...]:
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
         """Every env's seed: its last reset's, or the random one its generator was drawn from
         before any seeded reset; -1 where a generator was set (``set_attr("np_random")``)."""
         return tuple(self._seeds)
@@ -477,6 +481,8 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
             return [None] * self.num_envs
         if is_int(seed):
             return [int(seed) + env for env in range(self.num_envs)]
+        if not isinstance(seed, Iterable):  # a bool or a float
+            raise TypeError(f"seed must be an int, a list of ints or None, got {seed!r}")
         seeds = [int(s) if is_int(s) else s for s in seed]
         if len(seeds) != self.num_envs:
             raise ValueError(  # SyncVectorEnv's message

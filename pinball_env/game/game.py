@@ -215,6 +215,7 @@ class Game:
             )
         if options:
             table = self.world.table_of(env)
+            assert table.plunger is not None  # (check_playable)
             position = options.get("ball_position", table.plunger.position)
             velocity = options.get("ball_velocity", (0.0, 0.0))
             position, velocity = check_ball_state(table, position, velocity, "reset options")
@@ -248,13 +249,16 @@ class Game:
         a ball left in the shooter lane)."""
         self.launch_balls([env], {env: rng})
 
-    def launch_balls(self, envs: Sequence[int], rngs: Sequence[np.random.Generator] | dict) -> None:
+    def launch_balls(
+        self, envs: Sequence[int] | np.ndarray, rngs: Sequence[np.random.Generator] | dict
+    ) -> None:
         """:meth:`launch` for each of ``envs`` (env ``i`` drawing from ``rngs[i]``), the draws
         made env by env, in the order given, and the balls put in play at once."""
         progress, state = self.progress, self.state
         speeds = []
         for env in envs:
             plunger = self.world.table_of(env).plunger
+            assert plunger is not None  # (check_playable)
             if progress.plunge[env]:
                 scatter = float(rngs[env].uniform(-plunger.scatter, plunger.scatter))
                 speeds.append(plunger.launch_speed(state.plunger_pull[env]) + scatter)
@@ -358,7 +362,7 @@ class Game:
         if self.repeat_action_probability:
             draws = progress.repeat_draws
             for env in np.flatnonzero(playing):
-                draws[env] = rngs[env].random(draws.shape[1])
+                draws[env] = rngs[int(env)].random(draws.shape[1])
 
     def _play_frames(self, buttons: np.ndarray, rngs: Sequence[np.random.Generator]) -> None:
         """Run the compiled step loop with ``buttons`` held until every env's step is done,

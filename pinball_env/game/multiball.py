@@ -105,6 +105,7 @@ class Multiball:
         self._locks = (
             (int(self.lock_ids[0]), int(self.lock_ids[-1]) + 1) if len(self.lock_ids) else (0, 0)
         )
+        assert table.plunger is not None and table.trough is not None  # (a table of several balls)
         self.plunger = np.asarray(table.plunger.position, dtype=np.float64)
         auto = table.trough.auto_plunger
         self.auto_speed = auto.speed if auto is not None else table.plunger.speed
@@ -416,7 +417,7 @@ def sync_balls(state, memory, envs, first, end, plunger_x, lane_y):
 
 # Without reference counting (``_nrt=False``, as ``game.play.play_frames``): it allocates nothing,
 # and counting the references of every array taken out of ``state`` cost it half its time.
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def after_frames(state, memory, stepped, lock_ids, first, end, r2, frames, plunger_x, lane_y):
     """:meth:`Multiball.after_frame` of every env that ``stepped`` marks, in one compiled
     pass (module docstring): ``memory.was_active`` holds the balls in play before the frame's

@@ -92,6 +92,8 @@ def _cabinet_parameters(table: Table, world: World) -> dict[str, Any]:
                     nudge_impulse=0.0, nudge_frames=0, warnings=0, warning_frames=0,
                     settle_frames=0, skill_sensors=skill_sensors, skill_bonus=0,
                     skill_frames=0)  # fmt: skip
+    assert plunger is not None and cabinet is not None and tilt is not None  # (the whole cabinet)
+    assert plunger.stroke is not None and plunger.pull_time is not None  # (the player's plunger)
     skill = plunger.skill_shot
     for env in range(world.n_envs):
         names = world.table_of(env).element_names

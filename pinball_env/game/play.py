@@ -66,7 +66,7 @@ class StepProgress(NamedTuple):
 NEW_STEP, NEXT_FRAME, PHYSICS, AFTER_PHYSICS, SEARCH, CLOSE_FRAME, STEP_DONE = range(7)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(cache=True, nogil=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def play_frames(
     geometries, settings, state, scratch, progress, params, commands, cabinet_buttons, swept,
     start, stop,

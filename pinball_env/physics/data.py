@@ -18,6 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from pinball_env.physics.columns import (
     BALL_STATE_SIZE,
@@ -184,7 +185,7 @@ def log_contact(state, env, element, time, speed):
     state.contact_count[env] = row + 1
 
 
-def segment_bounds(segments: np.ndarray) -> np.ndarray:
+def segment_bounds(segments: ArrayLike) -> np.ndarray:
     """Bounds of every segment, (S, BOUND_SIZE): its bounding circle (centre and half its
     length) and its line (unit normal rot+90(P1 - P0) and offset; zero for a point)."""
     segments = np.asarray(segments, dtype=np.float64).reshape(-1, 4)

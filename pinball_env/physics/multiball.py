@@ -297,7 +297,9 @@ def cross_lines(state, env, geometry, x, y, vx, vy, dt, start):
 # --- the step --------------------------------------------------------------------------------
 
 
-# Long by design, as step.step_ball: the hot loop of a multi-ball frame, written out.
+# Long by design, as step.step_ball: the hot loop of a multi-ball frame, written out, since
+# numba counts a reference to every array a compiled function receives, and helpers taking
+# arrays in the pass loop cost more than the physics.
 @njit(cache=True, inline="always")
 def step_balls(geometry, settings, state, scratch, pair, env):
     """Advance env ``env`` by one frame in place with its M ball slots: its
@@ -634,7 +636,7 @@ def step_balls(geometry, settings, state, scratch, pair, env):
     return finite
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(cache=True, nogil=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def step_multiworld(geometry, settings, state, scratch, pair, moving, start, stop):
     """:func:`step_balls` for the envs from ``start`` to ``stop`` for which ``moving`` is set
     (``step.step_world``'s contract). Returns the number of stepped envs with a ball whose

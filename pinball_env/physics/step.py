@@ -663,7 +663,7 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
     return math.isfinite(x + y + vx + vy + spin)
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(cache=True, nogil=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def step_world(geometry, settings, state, scratch, moving, start, stop):
     """Advance the envs from ``start`` to ``stop`` (``0, n_envs``: every env) for which
     ``moving`` ((n_envs,) bool) is set by one frame ``settings.dt`` in place, logging contacts

@@ -78,10 +78,12 @@ def plunger_pulls(table: Table) -> list[float]:
     """The plunger's pull [m] after each whole frame of holding its button (the first entry:
     one frame), up to the whole stroke, summed frame by frame as the game does."""
     plunger = table.plunger
-    step = plunger.stroke / (plunger.pull_time * table.simulation.frame_rate)
-    pulls = [min(step, plunger.stroke)]
-    while pulls[-1] < plunger.stroke:
-        pulls.append(min(pulls[-1] + step, plunger.stroke))
+    assert plunger is not None and plunger.stroke is not None and plunger.pull_time is not None
+    stroke = plunger.stroke
+    step = stroke / (plunger.pull_time * table.simulation.frame_rate)
+    pulls = [min(step, stroke)]
+    while pulls[-1] < stroke:
+        pulls.append(min(pulls[-1] + step, stroke))
     return pulls
 
 
@@ -96,7 +98,9 @@ def skill_shot_frames(table: Table) -> int:
     lit most often (found by simulating them all; of equals, the middle one); the whole stroke
     if none does (or the table has no skill shot)."""
     pulls = plunger_pulls(table)
-    skill, plunger = table.plunger.skill_shot, table.plunger
+    plunger = table.plunger
+    assert plunger is not None  # (plunger_pulls: the player's)
+    skill = plunger.skill_shot
     if skill is None or skill.sensor not in table.element_names:
         return len(pulls)
     offsets = np.linspace(-plunger.scatter, plunger.scatter, SCATTER_SAMPLES)
@@ -122,6 +126,7 @@ def bob_response(table: Table, seconds: float = 8.0) -> np.ndarray:
     it stays inside the ring, so the swing of any nudges is the sum of these, shifted."""
     constants = table.pack().cabinet[0]
     h = 1.0 / (table.simulation.frame_rate * table.simulation.substeps)
+    assert table.cabinet is not None
     state = np.zeros(CABINET_STATE_SIZE)
     state[CABINET_SHOVE_X] = table.cabinet.nudge_impulse
     angles = np.empty(round(seconds / h))
@@ -270,6 +275,7 @@ class HeuristicPolicy:
     def _prepare_cabinet(self, table: Table, tilt_margin: float) -> None:
         """What the plunge and the nudges need of a table with the cabinet: the skill shot's
         release, the outlanes, the bob's response to a shove and the tilt ring's margin."""
+        assert table.tilt is not None and table.cabinet is not None
         rate = table.simulation.frame_rate
         pulls = plunger_pulls(table)
         self._release = pulls[skill_shot_frames(table) - 1] - 0.5 * pulls[0]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numba import njit
@@ -37,7 +38,8 @@ class Obstacles:
             self.segments.append((x0, y0, x1, y1))
 
     def add_circle(self, center: list[float], radius: float) -> None:
-        self.circles.append((*center, radius))
+        x, y = center
+        self.circles.append((x, y, radius))
 
     def circle_gap(self, x: float, y: float, radius: float) -> float:
         """The smallest gap between a circle and everything placed."""
@@ -45,7 +47,7 @@ class Obstacles:
         gaps += [math.hypot(x - cx, y - cy) - radius - r for cx, cy, r in self.circles]
         return min(gaps, default=math.inf)
 
-    def segment_gap(self, segment: tuple[float, float, float, float]) -> float:
+    def segment_gap(self, segment: Sequence[float]) -> float:
         """The smallest gap between a segment and everything placed."""
         segments, circles = self._rows
         if len(segments) != len(self.segments) or len(circles) != len(self.circles):

@@ -119,6 +119,7 @@ def _starts(
     could keep one bouncing from side to side for ever), and ``drops`` balls at random
     reachable places (``space``, a ``free_space`` grid), at random speeds."""
     plunger = table.plunger
+    assert plunger is not None  # (a generated table's machine plunger)
     speeds = np.linspace(plunger.speed[0], plunger.speed[1], LAUNCHES)
     inlanes = [s for s in table.sensors if s.name.endswith("_inlane")]
     balls = [(plunger.position, (0.0, float(v))) for v in speeds]
@@ -188,7 +189,7 @@ def _roll(table: Table, starts: Starts, lane_x: float) -> str | tuple[np.ndarray
     # by frame, then env: where stepping every ball together would have stopped.
     ended = np.flatnonzero((outcome == RESTED) | (outcome == NOT_FINITE))
     if ended.size:
-        frame, _, env = min((last_frame[e], outcome[e] == RESTED, e) for e in ended)
+        frame, _, env = min((last_frame[e], outcome[e] == RESTED, int(e)) for e in ended)
         if outcome[env] == NOT_FINITE:
             bad = ended[(last_frame[ended] == frame) & (outcome[ended] == NOT_FINITE)].tolist()
             raise FloatingPointError(f"the ball state of env(s) {bad} is no longer finite")
@@ -204,7 +205,7 @@ def _roll(table: Table, starts: Starts, lane_x: float) -> str | tuple[np.ndarray
 
 # No reference counting, as step_world: numba would count one for every array taken out of the
 # records at every frame (measured: 2.3x slower).
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(cache=True, nogil=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def _roll_balls(
     geometry, settings, state, scratch, lane_x, radius, frames, rest_frames, outcome,
     last_frame, entered, touched,

@@ -158,7 +158,7 @@ class Renderer:
         half-length [m], tip half-width [px]) and the scale of its drawn pull; (None, 1.0) for a
         table whose plunger the machine fires."""
         plunger = self.table.plunger
-        if plunger is None or not plunger.manual:
+        if plunger is None or plunger.stroke is None:  # (not plunger.manual)
             return None, 1.0
         scale = math.sqrt(self._view[0] * self._view[1])  # as the walls' widths
         radius = self.table.ball.radius
@@ -258,11 +258,7 @@ class Renderer:
 
         Several balls: ``other_balls`` (N, K, >= 2) [m] more balls' centres, drawn where
         ``other_visible`` (N, K) bool (on top of everything but the first ball)."""
-        flipper_angles = np.asarray(flipper_angles, dtype=np.float64)
-        if flipper_angles.ndim != 2 or flipper_angles.shape[1] != len(self._flippers):
-            raise ValueError(
-                f"expected (N, {len(self._flippers)}) flipper angles, got {flipper_angles.shape}"
-            )
+        flipper_angles = self._checked_flipper_angles(flipper_angles)
         static = self._static_gray if grayscale else self._static_rgb
         n, (rows, columns, channels) = flipper_angles.shape[0], static.shape
         balls = np.ascontiguousarray(balls, dtype=np.float64)
@@ -274,6 +270,42 @@ class Renderer:
             out = np.empty((n, self.height, self.width, channels), dtype=np.uint8)
         fills = (rows, columns) == (self.height, self.width)
         pictures = out if fills else np.empty((n, *static.shape), dtype=np.uint8)
+        self._draw_moving_parts(
+            pictures, static, balls, visible, flipper_angles, shifts, tips, grayscale, threads
+        )
+        if targets is not None:
+            self._paint_targets(pictures, targets, balls, visible, shifts, grayscale)
+        if other_balls is not None and other_visible is not None:
+            self._paint_other_balls(pictures, other_balls, other_visible, shifts, grayscale)
+        if not fills:
+            out[...] = luminance(BACKGROUND) if grayscale else BACKGROUND
+            out[:, self.top : self.top + rows, self.left : self.left + columns] = pictures
+        return out
+
+    def _checked_flipper_angles(self, flipper_angles: np.ndarray) -> np.ndarray:
+        """``flipper_angles`` as float64, (N, F) for this table's F flippers, or ValueError."""
+        flipper_angles = np.asarray(flipper_angles, dtype=np.float64)
+        if flipper_angles.ndim != 2 or flipper_angles.shape[1] != len(self._flippers):
+            raise ValueError(
+                f"expected (N, {len(self._flippers)}) flipper angles, got {flipper_angles.shape}"
+            )
+        return flipper_angles
+
+    def _draw_moving_parts(
+        self,
+        pictures: np.ndarray,
+        static: np.ndarray,
+        balls: np.ndarray,
+        visible: np.ndarray,
+        flipper_angles: np.ndarray,
+        shifts: np.ndarray,
+        tips: np.ndarray,
+        grayscale: bool,
+        threads: EnvThreads | None,
+    ) -> None:
+        """The static layer, the flippers, the plunger and the ball of each env into
+        ``pictures`` (compiled, :func:`draw_moving_parts`; ``threads`` share the envs)."""
+        n = pictures.shape[0]
         colours = _moving_colours(grayscale)
         plunger = np.zeros(4) if self._plunger is None else self._plunger
         args = (
@@ -285,19 +317,22 @@ class Renderer:
             draw_moving_parts(*args, 0, n)
         else:
             threads.run(draw_moving_parts, n, *args)
-        if targets is not None:
-            self._paint_targets(pictures, targets, balls, visible, shifts, grayscale)
-        if other_balls is not None:
-            colour = luminance(BALL) if grayscale else rgb(BALL)
-            radius, view = self.table.ball.radius, self._view
-            for env, k in zip(*np.nonzero(other_visible), strict=True):
-                dx, dy = shifts[env, 1] / view[0], -shifts[env, 0] / view[1]
-                x, y = other_balls[env, k, 0] + dx, other_balls[env, k, 1] + dy
-                paint_disc(pictures[env], x, y, radius, colour, *view)
-        if not fills:
-            out[...] = luminance(BACKGROUND) if grayscale else BACKGROUND
-            out[:, self.top : self.top + rows, self.left : self.left + columns] = pictures
-        return out
+
+    def _paint_other_balls(
+        self,
+        pictures: np.ndarray,
+        other_balls: np.ndarray,
+        other_visible: np.ndarray,
+        shifts: np.ndarray,
+        grayscale: bool,
+    ) -> None:
+        """The more balls of each env (several balls), moved with the cabinet, over its picture."""
+        colour = luminance(BALL) if grayscale else rgb(BALL)
+        radius, view = self.table.ball.radius, self._view
+        for env, k in zip(*np.nonzero(other_visible), strict=True):
+            dx, dy = shifts[env, 1] / view[0], -shifts[env, 0] / view[1]
+            x, y = other_balls[env, k, 0] + dx, other_balls[env, k, 1] + dy
+            paint_disc(pictures[env], x, y, radius, colour, *view)
 
     def _paint_targets(
         self,
@@ -372,6 +407,7 @@ class Renderer:
             )
         pull = np.asarray(plunger_pull, dtype=np.float64).reshape(n)
         plunger = self.table.plunger
+        assert plunger is not None  # (self._plunger: the player's)
         drawn = np.clip(np.nan_to_num(pull), 0.0, plunger.stroke) * self.pull_scale
         return plunger.position[1] - self.table.ball.radius - drawn, drawn
 

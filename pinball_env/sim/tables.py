@@ -102,6 +102,7 @@ class EnvTables:
         if self._tables is None:
             self._tables = [self.first] * self.n_envs
             self._pack_all()
+        assert self._geometries is not None and self._settings is not None  # (_pack_all's)
         geometry, settings = self._pack(table)
         targets = tuple(len(a) for a in (geometry.drop_targets, geometry.bank_reset,
                                          geometry.spinners, geometry.kickbacks))  # fmt: skip
@@ -136,6 +137,7 @@ class EnvTables:
 
     def _pack_all(self) -> None:
         """The kernel's typed lists of every env's packed table."""
+        assert self._tables is not None
         packed = [self._pack(t) for t in self._tables]
         self._geometries = List([geometry for geometry, _ in packed])
         self._settings = List([settings for _, settings in packed])

@@ -462,7 +462,9 @@ class World:
                      self.held_time, self.released_from, self.state, stepped, self._holders,
                      self.settings.dt)  # fmt: skip
 
-    def launch_balls(self, envs: Sequence[int], speeds: Sequence[float]) -> None:
+    def launch_balls(
+        self, envs: Sequence[int] | np.ndarray, speeds: Sequence[float] | np.ndarray
+    ) -> None:
         """:meth:`launch` for each of ``envs`` at its entry of ``speeds`` [m/s], at once."""
         envs = np.asarray(envs, dtype=np.intp)
         positions = []
@@ -601,6 +603,7 @@ class World:
         moving = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
         if moving.shape != (self.n_envs,):
             raise ValueError(f"envs must have shape ({self.n_envs},), got {moving.shape}")
+        args: tuple[Any, ...]  # the kernel's arguments
         if self.several:
             args = (self.geometry, self.settings, self.state, self.scratch, self.pair, moving)
         elif self.tables.varied:

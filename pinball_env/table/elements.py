@@ -91,12 +91,12 @@ def _two_points(value: object, loc: Where, point: Parser) -> tuple[tuple[float, 
 
 
 # The keys of each record, in file order, and their parsers.
-MATERIAL_FIELDS = {
+MATERIAL_FIELDS: dict[str, Parser] = {
     # At most 1: a bounce never adds energy (kicks do, see _check_kickers).
     "restitution": partial(number, low=0.0, high=1.0),
     "friction": partial(number, low=0.0, high=2.0),
 }
-WALL_FIELDS = {
+WALL_FIELDS: dict[str, Parser] = {
     "name": string,
     "points": partial(point_list, point=POINT, min_len=2, max_len=MAX_POINTS),
     "closed": flag,
@@ -105,7 +105,7 @@ WALL_FIELDS = {
     "kick": _kick,
     "score": score,
 }
-POST_FIELDS = {
+POST_FIELDS: dict[str, Parser] = {
     "name": string,
     "center": POINT,
     "radius": partial(number, low=0.001, high=1.0, unit="m"),
@@ -113,7 +113,7 @@ POST_FIELDS = {
     "kick": _kick,
     "score": score,
 }
-FLIPPER_FIELDS = {
+FLIPPER_FIELDS: dict[str, Parser] = {
     "name": string,
     "pivot": POINT,
     "length": partial(number, low=0.01, high=1.0, unit="m"),  # a real flipper is ~70 mm
@@ -127,19 +127,19 @@ FLIPPER_FIELDS = {
     "button": partial(choice, options=BUTTONS),
     "score": score,
 }
-SENSOR_FIELDS = {
+SENSOR_FIELDS: dict[str, Parser] = {
     "name": string,
     "points": partial(point_list, point=POINT, min_len=2, max_len=2),
     "drain": flag,
     "score": score,
 }
-SKILL_SHOT_FIELDS = {
+SKILL_SHOT_FIELDS: dict[str, Parser] = {
     "sensor": string,
     "bonus": score,
     "time": partial(number, low=0.1, high=60.0, unit="s"),
 }
 _speed = partial(pair, item=partial(number, low=0.0, high=20.0, open_low=True, unit="m/s"))
-PLUNGER_FIELDS = {
+PLUNGER_FIELDS: dict[str, Parser] = {
     "position": POINT,
     "speed": _speed,
     "stroke": partial(number, low=0.005, high=0.2, unit="m"),  # a real one pulls ~5 cm
@@ -148,14 +148,18 @@ PLUNGER_FIELDS = {
     "scatter": partial(number, low=0.0, high=1.0, unit="m/s"),
     "skill_shot": partial(record, SkillShot, parsers=SKILL_SHOT_FIELDS),
 }
-STANDUP_FIELDS = {
+STANDUP_FIELDS: dict[str, Parser] = {
     "name": string,
     "points": partial(_two_points, point=POINT),
     "material": string,
     "score": score,
 }
-DROP_TARGET_FIELDS = {"name": string, "points": partial(_two_points, point=POINT), "score": score}
-DROP_BANK_FIELDS = {
+DROP_TARGET_FIELDS: dict[str, Parser] = {
+    "name": string,
+    "points": partial(_two_points, point=POINT),
+    "score": score,
+}
+DROP_BANK_FIELDS: dict[str, Parser] = {
     "name": string,
     "material": string,
     "targets": partial(
@@ -164,7 +168,7 @@ DROP_BANK_FIELDS = {
     # At least a few frames, so that the rules see the bank down before it rises.
     "reset_time": partial(number, low=0.1, high=60.0, unit="s"),
 }
-SPINNER_FIELDS = {
+SPINNER_FIELDS: dict[str, Parser] = {
     "name": string,
     "points": partial(_two_points, point=POINT),
     "radius": partial(number, low=0.002, high=0.1, unit="m"),  # a real flap is ~15 mm
@@ -172,7 +176,7 @@ SPINNER_FIELDS = {
     "friction": partial(number, low=0.0, high=1000.0, unit="rad/s^2"),
     "score": score,
 }
-KICKBACK_FIELDS = {
+KICKBACK_FIELDS: dict[str, Parser] = {
     "name": string,
     "points": partial(_two_points, point=POINT),
     "kick": velocity_pair,
@@ -191,7 +195,7 @@ def _eject_velocity(value: object, loc: Where) -> tuple[float, float]:
 # Multiball.
 _capture_radius = partial(number, low=0.01, high=0.1, unit="m")
 _capture_speed = partial(number, low=0.05, high=5.0, unit="m/s")
-SAUCER_FIELDS = {
+SAUCER_FIELDS: dict[str, Parser] = {
     "name": string,
     "center": POINT,
     "radius": _capture_radius,
@@ -200,7 +204,7 @@ SAUCER_FIELDS = {
     "kick": _eject_velocity,
     "score": score,
 }
-LOCK_FIELDS = {
+LOCK_FIELDS: dict[str, Parser] = {
     "name": string,
     "slots": partial(point_list, point=POINT, min_len=1, max_len=MAX_LOCK_SLOTS),
     # Absent: the ball's radius (a real lock's slot is a ball-sized pocket).
@@ -209,8 +213,8 @@ LOCK_FIELDS = {
     "kick": _eject_velocity,
     "score": score,
 }
-AUTO_PLUNGER_FIELDS = {"speed": _speed}
-TROUGH_FIELDS = {
+AUTO_PLUNGER_FIELDS: dict[str, Parser] = {"speed": _speed}
+TROUGH_FIELDS: dict[str, Parser] = {
     "balls": partial(number, low=1, high=MAX_BALLS, integer=True),
     "auto_plunger": partial(record, AutoPlunger, parsers=AUTO_PLUNGER_FIELDS),
 }

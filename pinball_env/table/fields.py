@@ -21,7 +21,7 @@ import reprlib
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import MISSING, dataclass, fields
 from functools import partial
-from typing import Any, NoReturn
+from typing import Any, NoReturn, TypeGuard
 
 import numpy as np
 
@@ -39,26 +39,30 @@ _SHORT.maxlevel = 2
 _SHORT.maxlong = 40
 
 
+# What is_real accepts, as the type checker knows it (numbers.Real is not typed for arithmetic).
+Real = float | np.integer[Any] | np.floating[Any]
+
+
 class TableError(ValueError):
     """A table description is invalid or cannot be read."""
 
 
-def is_int(value: object) -> bool:
+def is_int(value: object) -> TypeGuard[int | np.integer[Any]]:
     """An integer (Python's or NumPy's), not a bool."""
     return isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
 
 
-def is_real(value: object) -> bool:
+def is_real(value: object) -> TypeGuard[Real]:
     """A real number (an int or a float, Python's or NumPy's), not a bool."""
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
-def is_flag(value: object) -> bool:
+def is_flag(value: object) -> TypeGuard[bool | np.bool_]:
     """True or False (Python's or NumPy's bool)."""
     return isinstance(value, (bool, np.bool_))
 
 
-def is_finite(value: object) -> bool:
+def is_finite(value: object) -> TypeGuard[Real]:
     """A real number that is finite as a float (an int too large for a float is not)."""
     try:
         return is_real(value) and math.isfinite(value)
@@ -175,7 +179,7 @@ def number(
 ) -> float | int:
     """A finite real (or, with ``integer``, an int) in the given interval. ``unit`` only
     documents the field (the table reference shows it); the messages keep their own wording."""
-    if not (is_int(value) if integer else is_real(value)):
+    if not is_real(value) or (integer and not is_int(value)):  # (an int is a real)
         hint = ""
         if isinstance(value, str) and _parses_as_float(value):
             hint = " (YAML reads exponents without a dot as text: write 1.0e-6, not 1e-6)"
@@ -208,10 +212,8 @@ def _parses_as_float(text: str) -> bool:
 def pair(value: object, loc: Where, item: Parser = number) -> tuple[Any, Any]:
     """An [x, y] pair of finite numbers (or of whatever ``item`` parses); a list, a tuple or a
     1-d numpy array (such as ``info["ball_position"]``)."""
-    pair_like = isinstance(value, (list, tuple)) or (
-        isinstance(value, np.ndarray) and value.ndim == 1
-    )
-    if not pair_like or len(value) != 2:
+    not_a_vector = isinstance(value, np.ndarray) and value.ndim != 1
+    if not isinstance(value, (list, tuple, np.ndarray)) or not_a_vector or len(value) != 2:
         loc.fail(f"expected a pair [x, y], got {describe(value)}")
     return (item(value[0], loc.index(0)), item(value[1], loc.index(1)))
 

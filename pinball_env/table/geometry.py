@@ -81,8 +81,9 @@ def check_held(
                 )
     circles = np.array([(*c, radius) for _, c in places], dtype=np.float64).reshape(-1, 3)
     for flipper in elements["flippers"]:
+        px, py = flipper.pivot
         gap, k = _swing_clearance(
-            *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
+            px, py, flipper.length, flipper.base_radius, flipper.tip_radius,
             math.radians(flipper.rest_angle), math.radians(flipper.up_angle),
             np.zeros((0, 4)), circles, SWING_CLEARANCE / 2.0, SWING_SAMPLES,
         )  # fmt: skip
@@ -114,8 +115,9 @@ def check_swings(groups: Mapping[str, tuple[Any, ...]], top: Where) -> None:
     owners = [f"wall {short(w.name)} segment {j}" for w, j, _ in _wall_segments(walls)]
     owners += [f"post {short(p.name)}" for p in posts]
     for i, flipper in enumerate(groups["flippers"]):
+        px, py = flipper.pivot
         gap, element = _swing_clearance(
-            *flipper.pivot, flipper.length, flipper.base_radius, flipper.tip_radius,
+            px, py, flipper.length, flipper.base_radius, flipper.tip_radius,
             math.radians(flipper.rest_angle), math.radians(flipper.up_angle), segments,
             circles, SWING_CLEARANCE / 2.0, SWING_SAMPLES,
         )  # fmt: skip

@@ -220,16 +220,16 @@ class Table:
             segments.append(target.segment)
             segment_props.append(self._props(target.material, 0.0))
             one_sided.append(False)
-        segments = _frozen_array(segments, np.float64, (-1, 4))
+        segment_rows = _frozen_array(segments, np.float64, (-1, 4))
         props = (-1, columns.PROP_SIZE)
         circles = [(*post.center, post.radius) for post in self.posts]
         circle_props = [self._props(post.material, post.kick) for post in self.posts]
         flippers = [_flipper_row(flipper) for flipper in self.flippers]
         flipper_props = [self._props(flipper.material, 0.0) for flipper in self.flippers]
         return Geometry(
-            segments=segments,
+            segments=segment_rows,
             segment_bounds=_frozen_array(
-                segment_bounds(segments), np.float64, (-1, columns.BOUND_SIZE)
+                segment_bounds(segment_rows), np.float64, (-1, columns.BOUND_SIZE)
             ),
             segment_props=_frozen_array(segment_props, np.float64, props),
             segment_one_sided=_frozen_array(one_sided, np.bool_, (-1,)),
@@ -275,6 +275,7 @@ class Table:
         if self.cabinet is None:
             return []
         cabinet, tilt = self.cabinet, self.tilt
+        assert tilt is not None  # (the whole cabinet)
         row = [0.0] * columns.CABINET_SIZE
         row[columns.CABINET_MASS] = cabinet.mass
         row[columns.CABINET_STIFFNESS] = cabinet.stiffness
@@ -342,6 +343,6 @@ def _flipper_row(flipper: Flipper) -> list[float]:
 
 
 def _frozen_array(rows: Any, dtype: type, shape: tuple[int, ...]) -> np.ndarray:
-    array = np.ascontiguousarray(np.asarray(rows, dtype=dtype).reshape(shape))
+    array: np.ndarray = np.ascontiguousarray(np.asarray(rows, dtype=dtype).reshape(shape))
     array.flags.writeable = False
     return array

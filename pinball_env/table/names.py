@@ -104,13 +104,14 @@ def _table_file(name_or_path: str | os.PathLike[str]) -> Path:
     try:
         if path.suffix not in SUFFIXES and len(path.parts) == 1:
             candidates = [builtin_tables_dir() / f"{path.name}{suffix}" for suffix in SUFFIXES]
-            path = next((p for p in candidates if p.is_file()), None)
-            if path is None:
+            builtin = next((p for p in candidates if p.is_file()), None)
+            if builtin is None:
                 available = ", ".join(available_tables()) or "none"
                 rigs = ", ".join(available_tables("test"))
                 raise TableError(
                     f"unknown table {shown!r} (available: {available}; test rigs: {rigs})"
                 )
+            path = builtin
         found = path.is_file()
     except OSError as exc:  # a name too long for the file system, say
         raise TableError(f"{shown}: cannot read the file: {clipped(str(exc), 120)}") from None
@@ -144,8 +145,7 @@ def load_any_table(name_or_path: str | os.PathLike[str]) -> Table:
     ``"procgen-hard:SEED"``, any registered prefix): what the envs, the plot tool and the
     training configs take. A name ``PREFIX:...`` whose prefix no generator registered (not a
     path to a file) is a ``TableError`` naming those that are."""
-    match = GENERATED_NAME.fullmatch(name_or_path) if isinstance(name_or_path, str) else None
-    if match is not None:
+    if isinstance(name_or_path, str) and (match := GENERATED_NAME.fullmatch(name_or_path)):
         make = _GENERATORS.get(match[1])
         if make is not None:
             return make(name_or_path)

@@ -170,8 +170,8 @@ def _walk(
             inner = path + ("[]" if decl.func is records else "")
             _walk(decl.keywords["parsers"], _defaults(decl.args[0]), inner, docs)
         elif isinstance(decl, (Mapping, list)):  # a list of one mapping: a list of such ones
-            inner, path = (decl, path) if isinstance(decl, Mapping) else (decl[0], path + "[]")
-            _walk(inner, _RULE_MAPPINGS.get(id(inner), ("", {}))[1], path, docs)
+            nested, path = (decl, path) if isinstance(decl, Mapping) else (decl[0], path + "[]")
+            _walk(nested, _RULE_MAPPINGS.get(id(nested), ("", {}))[1], path, docs)
 
 
 def _kind(decl: Any) -> str:
@@ -205,6 +205,7 @@ def _number(
     def text(x: float) -> str:
         return str(x) if integer else f"{x:g}"
 
+    assert low is not None  # (every number field of a table has its lower bound)
     if high is None:
         interval = f"{'>' if open_low else '>='} {text(low)}"
     else:

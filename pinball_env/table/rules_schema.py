@@ -70,8 +70,8 @@ def known_names(
 
 # The keys of the section and of its records, in file order, and their parsers. A timer's
 # ``known`` elements are the table's, given at parse time.
-LIGHT_FIELDS = {"name": string, "at": POINT, "lit": flag}
-TIMER_FIELDS = {
+LIGHT_FIELDS: dict[str, Parser] = {"name": string, "at": POINT, "lit": flag}
+TIMER_FIELDS: dict[str, Any] = {
     "name": string,
     "time": partial(number, low=0.0, high=600.0, open_low=True, unit="s"),
     "factor": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
@@ -80,11 +80,11 @@ TIMER_FIELDS = {
 # A rule's ``when`` holds one trigger (rules.TRIGGER_KEYS) and these keys; each effect of its
 # ``do`` holds one effect (rules.EFFECT_KEYS) and these. A mapping declares a mapping's keys
 # (each parsed by the code below), a list of one mapping a list of such mappings.
-WHEN_FIELDS = {"at": partial(number, low=1, high=MAX_COUNT, integer=True)}
-DO_FIELDS = {"by": partial(number, low=1, high=MAX_COUNT, integer=True)}
+WHEN_FIELDS: dict[str, Parser] = {"at": partial(number, low=1, high=MAX_COUNT, integer=True)}
+DO_FIELDS: dict[str, Parser] = {"by": partial(number, low=1, high=MAX_COUNT, integer=True)}
 DO_DEFAULTS = {"by": 1}
 # The number that each effect without names (rules.EFFECT_KEYS) takes.
-EFFECT_NUMBERS = {
+EFFECT_NUMBERS: dict[str, Parser] = {
     "score": partial(number, low=1, high=MAX_SCORE, integer=True),
     "bonus": partial(number, low=1, high=MAX_SCORE, integer=True),
     "multiplier": partial(number, low=1, high=MAX_MULTIPLIER, integer=True),
@@ -94,9 +94,14 @@ EFFECT_NUMBERS = {
 }
 # The triggers without names (rules.TRIGGER_KEYS): each takes ``true``.
 TRIGGER_FLAGS = ("multiball_starts", "multiball_ends")
-RULE_FIELDS = {"name": string, "when": WHEN_FIELDS, "do": [DO_FIELDS], "if_lit": string}
+RULE_FIELDS: dict[str, Any] = {
+    "name": string,
+    "when": WHEN_FIELDS,
+    "do": [DO_FIELDS],
+    "if_lit": string,
+}
 RULE_OPTIONAL = ("if_lit",)
-RULES_FIELDS = {
+RULES_FIELDS: dict[str, Any] = {
     "lights": partial(records, Light, parsers=LIGHT_FIELDS, max_len=MAX_RULES),
     "counters": partial(name_list, max_len=MAX_RULES),
     "timers": partial(records, Timer, parsers=TIMER_FIELDS, max_len=MAX_RULES),
@@ -139,7 +144,7 @@ def _declarations(
 ) -> tuple[tuple[Light, ...], tuple[str, ...], tuple[Timer, ...]]:
     """The lights, counters and timers that the rules name, each name given once; a timer's
     ``elements`` are among the table's ``elements``."""
-    fields = bound(RULES_FIELDS, point)
+    fields: dict[str, Any] = bound(RULES_FIELDS, point)  # (timers' takes its parsers too)
     lights = fields["lights"](raw.get("lights", []), loc.key("lights"))
     counters = fields["counters"](raw.get("counters", []), loc.key("counters"))
     timer_fields = {**TIMER_FIELDS, "elements": partial(TIMER_FIELDS["elements"], known=elements)}
@@ -205,12 +210,14 @@ def _named(
 
 def _trigger(value: object, loc: Where, known: Mapping[str, Any]) -> Trigger:
     kind = _one_key(value, loc, TRIGGERS, tuple(WHEN_FIELDS))
-    if TRIGGER_NAMES[kind] is None:  # TRIGGER_FLAGS
+    assert isinstance(value, Mapping)  # (_one_key's)
+    spec = TRIGGER_NAMES[kind]
+    if spec is None:  # TRIGGER_FLAGS
         if value[kind] is not True:
             loc.key(kind).fail(f"expected true, got {describe(value[kind])}")
         names: tuple[str, ...] = ()
     else:
-        names = _named(value[kind], loc.key(kind), TRIGGER_NAMES[kind], known)
+        names = _named(value[kind], loc.key(kind), spec, known)
     if ("at" in value) != (kind == "counter"):
         loc.fail("'at' goes with a counter trigger, and a counter trigger needs it")
     at = WHEN_FIELDS["at"](value["at"], loc.key("at")) if kind == "counter" else 0
@@ -219,6 +226,7 @@ def _trigger(value: object, loc: Where, known: Mapping[str, Any]) -> Trigger:
 
 def _effect(value: object, loc: Where, known: Mapping[str, Any]) -> Effect:
     kind = _one_key(value, loc, EFFECTS, tuple(DO_FIELDS))
+    assert isinstance(value, Mapping)  # (_one_key's)
     if "by" in value and kind != "count":
         loc.fail("'by' goes with a count effect only")
     spec = EFFECT_NAMES[kind]

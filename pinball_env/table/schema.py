@@ -80,22 +80,24 @@ from pinball_env.table.rules_schema import RULES_FIELDS, parse_rules, rule_names
 
 # Physically sensible ranges of the top level's numbers.
 _playfield_size = partial(number, low=0.05, high=5.0, unit="m")  # a real one is ~0.5 x 1 m
-PLAYFIELD_FIELDS = {"width": _playfield_size, "height": _playfield_size}
-BALL_FIELDS = {
+PLAYFIELD_FIELDS: dict[str, Parser] = {"width": _playfield_size, "height": _playfield_size}
+BALL_FIELDS: dict[str, Parser] = {
     "radius": partial(number, low=0.002, high=0.1, unit="m"),  # a real ball is 13.5 mm
     "mass": partial(number, low=0.001, high=10.0, unit="kg"),  # a real ball is 80 g
     "start": POINT,
     "velocity": velocity_pair,
     "material": string,  # of ball-ball contact: needed by a trough of several balls
 }
-SIMULATION_FIELDS = {
+SIMULATION_FIELDS: dict[str, Parser] = {
     "frame_rate": partial(number, low=1.0, high=1000.0, unit="1/s"),
     "substeps": partial(number, low=1, high=100, integer=True),
     "max_passes": partial(number, low=1, high=100, integer=True),
     "skin": partial(number, low=1e-8, high=1e-4, unit="m"),
     "resting_speed": partial(number, low=0.0, high=1.0, unit="m/s"),
 }
-BALL_SAVE_FIELDS = {"time": partial(number, low=0.0, high=60.0, open_low=True, unit="s")}
+BALL_SAVE_FIELDS: dict[str, Parser] = {
+    "time": partial(number, low=0.0, high=60.0, open_low=True, unit="s")
+}
 
 
 def _declared(group: str) -> dict[str, Parser]:
@@ -138,7 +140,7 @@ def table_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Table:
     height = _playfield_size(playfield["height"], top.key("playfield").key("height"))
     point = partial(in_playfield, width=width, height=height)
     materials = parse_materials(raw["materials"], top.key("materials"))
-    elements = parse_elements(raw, top, point, materials)
+    elements: dict[str, Any] = parse_elements(raw, top, point, materials)  # Table's fields
     ball_loc = top.key("ball")
     ball = record(Ball, raw["ball"], ball_loc, bound(BALL_FIELDS, point))
     check_placed(ball.start, ball.radius, elements, ball_loc.key("start"))

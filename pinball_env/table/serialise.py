@@ -77,7 +77,7 @@ def _plain(value: Any) -> Any:
 def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
     """The ``rules`` section as :func:`parse_rules` reads it."""
 
-    def names(spec: tuple[str, bool] | None, values: tuple[str, ...]) -> Any:
+    def names(spec: tuple[str, bool], values: tuple[str, ...]) -> Any:
         return list(values) if spec[1] else values[0]
 
     def trigger(when: Trigger) -> dict[str, Any]:

@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from pinball_env import MAX_EPISODE_STEPS  # importing the package registers Pinball-v0
+from pinball_env.envs import unwrapped_pinball
 from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
 
@@ -48,7 +49,7 @@ def play(
     """Play ``episodes`` games with the heuristic; returns their scores."""
     render_mode = "rgb_array" if headless else "human"
     env = gym.make("Pinball-v0", table=table, render_mode=render_mode, max_episode_steps=max_steps)
-    policy = HeuristicPolicy(env.unwrapped.table)
+    policy = HeuristicPolicy(unwrapped_pinball(env).table)
     scores = []
     for episode in range(episodes):
         _, info = env.reset(seed=seed + episode)
@@ -62,7 +63,9 @@ def play(
         end = "game over" if terminated else "time limit"
         print(f"game {episode + 1}: score {info['score']:6d} after {steps} steps ({end})")
     if snapshot is not None and headless:
-        save_png(env.render(), snapshot)
+        frame = env.render()
+        assert isinstance(frame, np.ndarray)  # (render_mode="rgb_array")
+        save_png(frame, snapshot)
         print(f"wrote {snapshot}")
     env.close()
     return scores

@@ -47,7 +47,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pinball_env.envs import PinballEnv
+from pinball_env.envs import PinballEnv, unwrapped_pinball
 from pinball_env.game import discrete_action
 from pinball_env.protocol import PROTOCOL_ENV_IDS, REPEAT_ACTION_PROBABILITY
 from pinball_env.recording import (
@@ -55,6 +55,7 @@ from pinball_env.recording import (
     GameRecord,
     Recording,
     RecordingError,
+    action_count,
     default_table,
     encode_action,
     format_version,
@@ -134,7 +135,7 @@ class _Screen:
     def __init__(self, env: gym.Env, fps: float | None, title: str) -> None:
         self.pygame = Window.import_pygame()
         self.pygame.display.init()  # the event queue works from here; the window opens later
-        self.fps = env.unwrapped.steps_per_second if fps is None else fps
+        self.fps = unwrapped_pinball(env).steps_per_second if fps is None else fps
         self.window: Window | None = None  # opened by the first frame, at its size
         self.title = title
         self._caption = title
@@ -156,6 +157,7 @@ class _Screen:
 
     def show(self, env: gym.Env, banner: str | None) -> None:
         frame = env.render()
+        assert isinstance(frame, np.ndarray)  # (render_mode="rgb_array")
         if banner is not None:
             frame = self._banner(frame, banner)
         caption = f"{self.title}: {banner}" if banner else self.title
@@ -269,8 +271,9 @@ class PlayLoop:
         self.env = make_recorded_env(self.options, env_id=env_id)
         self.screen = _Screen(self.env, fps, "Pinball")
         self._pygame = self.screen.pygame
-        game = self.env.unwrapped.game
-        self.keys_to_action = self.env.unwrapped.get_keys_to_action()
+        self.core = unwrapped_pinball(self.env)
+        game = self.core.game
+        self.keys_to_action = self.core.get_keys_to_action()
         # Each key's buttons, from its one-key entry: held keys press the union of theirs.
         self.key_buttons = {
             keys[0]: game.discrete_buttons[action]
@@ -283,8 +286,8 @@ class PlayLoop:
             env_id=env_id,
             options=self.options,
             max_episode_steps=self.env.spec.max_episode_steps if self.env.spec else None,
-            table_sha256=table_sha256(self.env.unwrapped.table),
-            version=format_version(self.env.action_space.n),
+            table_sha256=table_sha256(self.core.table),
+            version=format_version(action_count(self.env)),
         )
         self.held: set[int] = set()
         self.paused = False
@@ -348,7 +351,7 @@ class PlayLoop:
         pressed = self._no_buttons.copy()
         for key in self.held:
             pressed |= self.key_buttons[key]
-        return held_action(pressed, self.env.unwrapped.game.button_names)
+        return held_action(pressed, self.core.game.button_names)
 
     def tick(self) -> None:
         """One frame: a step of the game unless paused or over, then the picture."""
@@ -458,7 +461,7 @@ def play(
     if protocol:
         options["repeat_action_probability"] = REPEAT_ACTION_PROBABILITY
     loop = PlayLoop(options, seed, record, env_id=env_id)
-    print(keys_help(Window.import_pygame(), loop.env.unwrapped.game.cabinet))
+    print(keys_help(Window.import_pygame(), loop.core.game.cabinet))
     try:
         loop.run()
     finally:

@@ -201,10 +201,10 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
     ax.set_axis_off()
     ax.set_title("lamps lit, targets down, the bonus and its multiplier", fontsize=9)
     ax = fig.add_subplot(grid[0, 1])
-    scores, rule_scores = np.array(scores), np.array(rule_scores)
-    ax.plot(times, scores, color="#1d3557", label="score")
-    ax.plot(times, scores - rule_scores, color="#2a9d8f", label="from hits")
-    ax.plot(times, rule_scores, color="#e76f51", label="from the rules (modes, awards, bonus)")
+    points, rule_points = np.array(scores), np.array(rule_scores)
+    ax.plot(times, points, color="#1d3557", label="score")
+    ax.plot(times, points - rule_points, color="#2a9d8f", label="from hits")
+    ax.plot(times, rule_points, color="#e76f51", label="from the rules (modes, awards, bonus)")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("points")
     ax.legend(fontsize=8, loc="upper left")
@@ -212,8 +212,8 @@ def plot_rules(table: Table, out: Path, seed: int = 0) -> Path:
     twin.step(times, multipliers, color="#f4a261", lw=0.8, where="post", alpha=0.7)
     twin.set_ylabel("bonus multiplier", color="#f4a261")
     twin.set_ylim(0.5, table.rules.max_multiplier + 0.5)
-    ax.set_title(f"the heuristic's game (seed {seed}): {scores[-1]} points, "
-                 f"{rule_scores[-1]} from the rules", fontsize=9)  # fmt: skip
+    ax.set_title(f"the heuristic's game (seed {seed}): {points[-1]} points, "
+                 f"{rule_points[-1]} from the rules", fontsize=9)  # fmt: skip
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=90, bbox_inches="tight")
@@ -266,6 +266,7 @@ def multiball_game(
         if in_play > best or (in_play == best and since == MULTIBALL_SETTLE_FRAMES):
             best, frame = in_play, env.render()
     env.close()
+    assert frame is not None  # (the first step's, with at least 0 > -1 balls in play)
     return {key: np.array(values) for key, values in trace.items()}, frame
 
 
@@ -322,8 +323,11 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     plunge beside a whole stroke, one nudge (the cabinet's offset and the ball's velocity
     relative to the table), and the plumb bob under nudges left and right in a rhythm, with
     its ring, the warnings and the tilt."""
-    if not table.has_cabinet:
+    plunger = table.plunger
+    if not table.has_cabinet or plunger is None or plunger.pull_time is None:
         raise ValueError(f"table {table.name!r} has no cabinet")
+    if plunger.skill_shot is None:
+        raise ValueError(f"table {table.name!r} has no skill shot")
     from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
 
     plt = _pyplot()
@@ -332,41 +336,22 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     ax = fig.add_subplot(grid[:, 0])
     draw_table(ax, table, labels=False)
     rate = table.simulation.frame_rate
-    pull_frames = round(table.plunger.pull_time * rate)
+    pull_frames = round(plunger.pull_time * rate)
     for frames, colour in ((pull_frames - 4, "#2a9d8f"), (pull_frames, "#e76f51")):
         env = PinballEnv(table=table)
         env.reset(seed=0)
         path, speed = [], 0.0
-        for step in range(frames + round(table.plunger.skill_shot.time * rate)):
+        for step in range(frames + round(plunger.skill_shot.time * rate)):
             _, _, _, _, info = env.step(4 if step < frames else 0)
             path.append(info["ball_position"])
             if step == frames:  # the launch, one frame of gravity ago
                 speed = info["ball_velocity"][1] - table.gravity_vector[1] / rate
-        path = np.array(path)
-        ax.plot(*path.T, color=colour, lw=1.2, label=f"pull {frames} frames: {speed:.2f} m/s")
+        ax.plot(
+            *np.array(path).T, color=colour, lw=1.2, label=f"pull {frames} frames: {speed:.2f} m/s"
+        )
     ax.legend(loc="lower left", fontsize=7)
     ax.set_title("the plunger: the skill shot and a whole stroke", fontsize=9)
-
-    env = PinballEnv(table=table)
-    # A ball in free flight in the middle of the table.
-    env.reset(seed=0, options={"ball_position": [0.24, 0.42], "ball_velocity": [0.0, 0.3]})
-    game = env.game
-    times, offsets, relative = [], [], []
-    velocity0 = game.state.game_ball[0, 2]
-    for step in range(24):
-        env.step(8 if step == 5 else 0)  # one nudge left
-        times.append(step / rate)
-        offsets.append(1000 * game.world.state.cabinet[0, 0])
-        relative.append(game.state.game_ball[0, 2] - velocity0)
-    ax = fig.add_subplot(grid[0, 1])
-    ax.plot(times, offsets, color="#1d3557", label="cabinet offset x [mm]")
-    ax.plot(times, np.array(relative) * 10, color="#e63946",
-            label="ball vx relative to the table x10 [m/s]")  # fmt: skip
-    ax.axhline(0, color="#8d99ae", lw=0.5)
-    ax.legend(fontsize=7)
-    ax.set_title("one NUDGE_LEFT on a ball in free flight: the table moves left under it, "
-                 "and back", fontsize=9)  # fmt: skip
-
+    draw_nudge(fig.add_subplot(grid[0, 1]), table)
     ax = fig.add_subplot(grid[1, 1])
     draw_bob(ax, table, bob_trace(table, lambda step: 8 if (step // 15) % 2 == 0 else 16, 150))
     ax.set_title("nudges left and right every 0.25 s: warnings, then the tilt", fontsize=9)
@@ -375,6 +360,31 @@ def plot_cabinet(table: Table, out: Path) -> Path:
     fig.savefig(out, dpi=90, bbox_inches="tight")
     plt.close(fig)
     return out
+
+
+def draw_nudge(ax, table: Table) -> None:
+    """Draw one NUDGE_LEFT on a ball in free flight on ``ax``: the cabinet's offset and the
+    ball's velocity relative to the table."""
+    from pinball_env.envs import PinballEnv  # the envs import the plot's floor, not back
+
+    env = PinballEnv(table=table)
+    # A ball in free flight in the middle of the table.
+    env.reset(seed=0, options={"ball_position": [0.24, 0.42], "ball_velocity": [0.0, 0.3]})
+    game, rate = env.game, table.simulation.frame_rate
+    times, offsets, relative = [], [], []
+    velocity0 = game.state.game_ball[0, 2]
+    for step in range(24):
+        env.step(8 if step == 5 else 0)  # one nudge left
+        times.append(step / rate)
+        offsets.append(1000 * game.world.state.cabinet[0, 0])
+        relative.append(game.state.game_ball[0, 2] - velocity0)
+    ax.plot(times, offsets, color="#1d3557", label="cabinet offset x [mm]")
+    ax.plot(times, np.array(relative) * 10, color="#e63946",
+            label="ball vx relative to the table x10 [m/s]")  # fmt: skip
+    ax.axhline(0, color="#8d99ae", lw=0.5)
+    ax.legend(fontsize=7)
+    ax.set_title("one NUDGE_LEFT on a ball in free flight: the table moves left under it, "
+                 "and back", fontsize=9)  # fmt: skip
 
 
 # The nudges of the tilt's patterns by discrete action (see ``game.actions``).
@@ -411,13 +421,15 @@ def bob_trace(table: Table, action: Callable[[int], int], frames: int) -> dict[s
 def draw_bob(ax, table: Table, trace: dict[str, np.ndarray]) -> None:
     """Draw a :func:`bob_trace` on ``ax``: the bob's angle, its ring, the warnings, the tilts."""
     times, tilts = trace["time"], trace["tilted"]
+    assert table.tilt is not None  # (a table with a cabinet)
+    ring = table.tilt.ring_angle
     ax.plot(times, trace["angle"], color="#1d3557", label="plumb bob's angle [deg]")
-    ax.axhline(table.tilt.ring_angle, color="#e63946", ls="--", lw=0.8, label="the ring")
+    ax.axhline(ring, color="#e63946", ls="--", lw=0.8, label="the ring")
     ax.step(times, trace["warnings"], color="#f4a261", where="post", label="warnings")
     for t, tilted, before in zip(times, tilts, [False, *tilts], strict=False):
         if tilted and not before:  # a tilt: the ball lost, the next one served
             ax.axvline(t, color="#e63946", lw=2, alpha=0.5)
-            ax.text(t, table.tilt.ring_angle * 1.05, " TILT", color="#e63946", fontsize=8)
+            ax.text(t, ring * 1.05, " TILT", color="#e63946", fontsize=8)
     ax.set_xlabel("time [s]")
     ax.legend(fontsize=7, loc="upper left")
 
@@ -444,7 +456,7 @@ def plot_tilt(tables: list[Table], out: Path) -> Path:
     return out
 
 
-def main(argv: list[str] | None = None) -> Path:
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("table", nargs="?", default="box", help="table name or YAML path")
     parser.add_argument("--out", type=Path, default=Path("outputs/table.png"))
@@ -478,35 +490,37 @@ def main(argv: list[str] | None = None) -> Path:
         "--seeds", type=int, nargs=2, default=(0, 12), metavar=("FIRST", "COUNT"),
         help="the gallery's tables: COUNT seeds from FIRST (default: 0 12)",
     )  # fmt: skip
+    return parser
+
+
+def main(argv: list[str] | None = None) -> Path:
+    parser = _parser()
     args = parser.parse_args(argv)
-    if args.gallery:
-        first, count = args.seeds
-        if first < 0 or count < 1:
-            parser.error(f"--seeds needs FIRST >= 0 and COUNT >= 1, got {first} {count}")
-        tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
-        out = plot_gallery(tables, args.out, columns=min(count, 6))
-        print(f"wrote {out}")
-        return out
-    if args.rules:
-        out = plot_rules(load_any_table(args.table), args.out)
-        print(f"wrote {out}")
-        return out
-    if args.multiball:
-        out = plot_multiball(load_any_table(args.table), args.out)
-        print(f"wrote {out}")
-        return out
-    if args.tilt:
-        out = plot_tilt([load_any_table(name) for name in args.tilt], args.out)
-        print(f"wrote {out}")
-        return out
-    if args.cabinet:
-        out = plot_cabinet(load_any_table(args.table), args.out)
-        print(f"wrote {out}")
-        return out
-    velocity = tuple(args.velocity) if args.velocity else None
-    out = plot_table(load_any_table(args.table), args.out, args.trace, velocity)
+    if args.gallery and (args.seeds[0] < 0 or args.seeds[1] < 1):
+        parser.error(
+            f"--seeds needs FIRST >= 0 and COUNT >= 1, got {args.seeds[0]} {args.seeds[1]}"
+        )
+    out = _plot(args)
     print(f"wrote {out}")
     return out
+
+
+def _plot(args: argparse.Namespace) -> Path:
+    """The picture the arguments ask for (one kind, the first given of those below)."""
+    if args.gallery:
+        first, count = args.seeds
+        tables = [generate_table(s, args.difficulty) for s in range(first, first + count)]
+        return plot_gallery(tables, args.out, columns=min(count, 6))
+    if args.rules:
+        return plot_rules(load_any_table(args.table), args.out)
+    if args.multiball:
+        return plot_multiball(load_any_table(args.table), args.out)
+    if args.tilt:
+        return plot_tilt([load_any_table(name) for name in args.tilt], args.out)
+    if args.cabinet:
+        return plot_cabinet(load_any_table(args.table), args.out)
+    velocity = tuple(args.velocity) if args.velocity else None
+    return plot_table(load_any_table(args.table), args.out, args.trace, velocity)
 
 
 if __name__ == "__main__":

@@ -44,6 +44,7 @@ from urllib.parse import urlsplit
 
 import gymnasium as gym
 
+from pinball_env.envs import unwrapped_pinball
 from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import PROTOCOL_ENV_IDS, REPEAT_ACTION_PROBABILITY
@@ -147,14 +148,7 @@ def make_app(
         return HTMLResponse(page)
 
     async def socket(websocket: WebSocket) -> None:
-        origin = websocket.headers.get("origin")
-        if origin is not None and urlsplit(origin).netloc != websocket.headers.get("host"):
-            await websocket.close(code=1008, reason="another site's page")
-            return
-        await websocket.accept()
-        if len(viewers) >= max_viewers:
-            await websocket.send_text(encode(error(f"full: {max_viewers} pages at most")))
-            await websocket.close(code=1013)
+        if not await admitted(websocket, viewers, max_viewers):
             return
         viewers.add(websocket)
         session = None
@@ -181,6 +175,21 @@ def make_app(
     )
     app.state.viewers = viewers
     return app
+
+
+async def admitted(websocket: "WebSocket", viewers: set[Any], max_viewers: int) -> bool:
+    """Whether a page's WebSocket may play: not when another site's page opened it (closed
+    unaccepted) or when ``max_viewers`` pages already play (accepted to be told so, closed)."""
+    origin = websocket.headers.get("origin")
+    if origin is not None and urlsplit(origin).netloc != websocket.headers.get("host"):
+        await websocket.close(code=1008, reason="another site's page")
+        return False
+    await websocket.accept()
+    if len(viewers) >= max_viewers:
+        await websocket.send_text(encode(error(f"full: {max_viewers} pages at most")))
+        await websocket.close(code=1013)
+        return False
+    return True
 
 
 async def play_session(
@@ -352,7 +361,7 @@ def session_factory(args: argparse.Namespace) -> tuple[SessionFactory, str]:
 
         def heuristic() -> WatchedPlayer:
             env = gym.make(env_id, **options)
-            policy = HeuristicPolicy(env.unwrapped.table)
+            policy = HeuristicPolicy(unwrapped_pinball(env).table)
             return WatchedPlayer(env, lambda obs, info: policy(info), policy.reset)
 
         def watch() -> Session:

@@ -15,6 +15,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from pinball_env.envs import unwrapped_pinball
 from pinball_env.game.actions import action_meanings
 from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import EVAL_SEEDS, GAME_OPTIONS, REPEAT_ACTION_PROBABILITY
@@ -61,7 +62,7 @@ def heuristic_games(env_id: str, games: int) -> dict[str, Any]:
     (sticky actions): its mean score, the nudges it pressed, the frames with a warning standing,
     the most warnings ever standing and the tilts."""
     env = gym.make(env_id, **GAME_OPTIONS, repeat_action_probability=REPEAT_ACTION_PROBABILITY)
-    policy = HeuristicPolicy(env.unwrapped.table)
+    policy = HeuristicPolicy(unwrapped_pinball(env).table)
     totals = {"games": 0, "score": 0.0, "nudges": 0, "warned_frames": 0, "most_warnings": 0,
               "tilts": 0}  # fmt: skip
     for seed in list(EVAL_SEEDS)[:games]:

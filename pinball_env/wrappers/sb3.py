@@ -11,7 +11,7 @@ env in the step that ends its episode, keeping the last observation in
 
 import time
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import Any, TypeGuard
 
 import numba
 import numpy as np
@@ -21,6 +21,7 @@ from pinball_env.envs import PinballVectorEnv
 from pinball_env.extras import require
 
 require("stable_baselines3")
+from stable_baselines3.common.running_mean_std import RunningMeanStd  # noqa: E402
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize  # noqa: E402
 
 
@@ -163,18 +164,21 @@ class SB3VecNormalize(VecNormalize):
 
     def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
         obs, rewards, dones, infos = self.venv.step_wait()
+        assert isinstance(obs, (np.ndarray, dict))  # (as VecNormalize's: not a tuple)
         self.old_obs = obs
         self.old_reward = rewards
         if self.training and self.norm_obs:
-            if _compiled(obs) and self.obs_rms.mean.size > 1:
-                shape = self.obs_rms.mean.shape
+            rms = self.obs_rms  # one RunningMeanStd for an array, one per key for a dict
+            if _compiled(obs) and isinstance(rms, RunningMeanStd) and rms.mean.size > 1:
+                shape = rms.mean.shape
                 mean, var = batch_moments(np.ascontiguousarray(obs).reshape(len(obs), -1))
-                self.obs_rms.update_from_moments(mean.reshape(shape), var.reshape(shape), len(obs))
-            elif isinstance(obs, dict) and isinstance(self.obs_rms, dict):
-                for key in self.obs_rms:
-                    self.obs_rms[key].update(obs[key])
+                rms.update_from_moments(mean.reshape(shape), var.reshape(shape), len(obs))
+            elif isinstance(obs, dict) and isinstance(rms, dict):
+                for key in rms:
+                    rms[key].update(obs[key])
             else:
-                self.obs_rms.update(obs)
+                assert isinstance(rms, RunningMeanStd)
+                rms.update(obs)
         obs = self.normalize_obs(obs)
         if self.training:
             self._update_reward(rewards)
@@ -188,16 +192,17 @@ class SB3VecNormalize(VecNormalize):
         return obs, rewards, dones, infos
 
     def normalize_obs(self, obs: np.ndarray | dict[str, np.ndarray]) -> Any:
-        if not (self.norm_obs and _compiled(obs)):
+        rms = self.obs_rms
+        if not (self.norm_obs and _compiled(obs) and isinstance(rms, RunningMeanStd)):
             return super().normalize_obs(obs)
-        std = np.sqrt(self.obs_rms.var + self.epsilon).reshape(-1)
+        std = np.sqrt(rms.var + self.epsilon).reshape(-1)
         rows = np.ascontiguousarray(obs).reshape(-1, std.size)  # one row per observation
-        return normalized(rows, self.obs_rms.mean.reshape(-1), std, float(self.clip_obs)).reshape(
+        return normalized(rows, rms.mean.reshape(-1), std, float(self.clip_obs)).reshape(
             np.shape(obs)
         )
 
 
-def _compiled(obs: Any) -> bool:
+def _compiled(obs: Any) -> TypeGuard[np.ndarray]:
     """Whether the compiled passes take ``obs``: a float array (numpy sums integers in float64)."""
     return isinstance(obs, np.ndarray) and obs.dtype in (np.float32, np.float64)
 

@@ -49,7 +49,7 @@ the pymunk bodies, steps the spaces, and reads the bodies back. So everything bu
 """
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -82,7 +82,10 @@ from pinball_env.physics.targets import (
 from pinball_env.sim.world import World
 from pinball_env.table import Table
 
-pymunk = require("pymunk")
+if TYPE_CHECKING:  # the module require() returns, for its types
+    import pymunk
+else:
+    pymunk = require("pymunk")
 
 # Chipmunk's defaults assume pixels; in metres they would let the ball sink 10 cm into a wall.
 COLLISION_SLOP = 1e-4  # [m] overlap allowed before the position correction acts
@@ -135,6 +138,7 @@ class _EnvSpace:
         self.pending_drops: list[int] = []  # drop targets hit in the substep under way
 
         static = space.static_body
+        shape: pymunk.Shape
         for element, (x0, y0, x1, y1) in enumerate(geometry.segments):
             shape = pymunk.Segment(static, (x0, y0), (x1, y1), 0.0)
             self._add_element(shape, element, geometry.segment_props[element])
@@ -162,7 +166,7 @@ class _EnvSpace:
         radius = table.ball.radius
         self.mass, self.moment = mass, 0.4 * mass * radius * radius  # a solid sphere
         self.balls: list[pymunk.Body] = []
-        self.ball_shapes: list[pymunk.Circle] = []
+        self.ball_shapes: list[pymunk.Shape] = []
         for i in range(world.n_balls):
             body = pymunk.Body(self.mass, self.moment)
             shape = pymunk.Circle(body, radius)
@@ -211,6 +215,7 @@ class _EnvSpace:
             return
         other, _, _ = self._other(arbiter)
         ball = arbiter.shapes[0].body
+        assert ball is not None  # (a ball's shape has its body)
         if other.drop_target >= 0 and not self.world.state.targets_up[self.env, other.drop_target]:
             arbiter.process_collision = False  # fallen: no contact
         elif other.one_sided:
@@ -225,6 +230,7 @@ class _EnvSpace:
             return  # ball-ball contacts are not logged (no element id), as in the kernel
         other, nx, ny = self._other(arbiter)
         ball = arbiter.shapes[0].body
+        assert ball is not None and other.body is not None  # (shapes in the space have bodies)
         if other.one_sided or other.drop_target >= 0:
             self._pre_solve(arbiter, space, data)
             if not arbiter.process_collision:

@@ -35,15 +35,17 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pinball_env.envs import PinballEnv
+from pinball_env.envs import PinballEnv, unwrapped_pinball
 from pinball_env.game import GameState
 from pinball_env.recording import (
     GameRecord,
     Recording,
+    action_count,
     decode_recorded_actions,
     encode_action,
     format_version,
     make_recorded_env,
+    played_table,
     replay,
     table_sha256,
     write_recording,
@@ -89,7 +91,7 @@ def parse_message(text: str | bytes, accepted: Sequence[str]) -> Message:
     if not isinstance(message, dict):
         raise MessageError(f"expected a JSON object, got {type(message).__name__}")
     kind = message.get("type")
-    if kind not in accepted:
+    if not isinstance(kind, str) or kind not in accepted:
         raise MessageError(f"unknown message type {kind!r}; this page takes {', '.join(accepted)}")
     fields = MESSAGES[kind]
     for key, value in message.items():
@@ -164,8 +166,8 @@ class Recorder:
             env_id=env_id,
             options=dict(options),
             max_episode_steps=env.spec.max_episode_steps if env.spec else None,
-            table_sha256=table_sha256(env.unwrapped.table),
-            version=format_version(env.action_space.n),
+            table_sha256=table_sha256(played_table(env)),
+            version=format_version(action_count(env)),
         )
 
     def add(self, game: GameRecord) -> None:
@@ -200,12 +202,12 @@ class PlaySession(Session):
                 )
         self.env_id = env_id
         self.env = make_recorded_env(options, env_id=env_id)
-        self.core: PinballEnv = self.env.unwrapped
+        self.core = unwrapped_pinball(self.env)
         self.fps = _frame_rate(self.core)
         self.names = self.core.game.button_names
         self.nudges = self.core.options.nudge_actions
         self.recorder = recorder
-        self.version = format_version(self.env.action_space.n)
+        self.version = format_version(action_count(self.env))
         self.held: set[str] = set()
         self.paused = False
         self._new_game(secrets.randbelow(1_000_000) if seed is None else seed)
@@ -255,7 +257,7 @@ class PlaySession(Session):
             self.actions.append(action)
             if terminated or truncated:
                 replies += self._end_game("game over" if terminated else "time limit")
-        frame = {"type": "frame", "games": [frame_state(self.core, self.over)]}
+        frame: Message = {"type": "frame", "games": [frame_state(self.core, self.over)]}
         frame["paused"] = self.paused
         return [frame, *replies]
 
@@ -304,7 +306,7 @@ class _Watched:
 
     def __init__(self, player: WatchedPlayer) -> None:
         self.player = player
-        self.core: PinballEnv = player.env.unwrapped
+        self.core = unwrapped_pinball(player.env)
         self.frames: deque[dict[str, Any]] = deque()
         options = self.core.options
         # A step of several frames (frame skip, skip_above): each frame shown, as a video has.
@@ -369,8 +371,10 @@ class WatchSession(Session):
 
     def hello(self) -> list[Message]:
         first = self.games[0]
+        spec = first.player.env.spec
+        assert spec is not None  # (a gym.make env, as WatchedPlayer says)
         return [{
-            "type": "hello", "mode": "watch", "env_id": first.player.env.spec.id, "fps": self.fps,
+            "type": "hello", "mode": "watch", "env_id": spec.id, "fps": self.fps,
             "tables": [_table_geometry(game.core) for game in self.games], "player": self.name,
             "keys": page_keys((), COMMAND_KEYS),
         }]  # fmt: skip
@@ -412,7 +416,7 @@ class Snapshot:
 
     frame: int
     state: GameState
-    rng: dict[str, Any]
+    rng: Mapping[str, Any]  # (bit_generator.state)
 
 
 class ReplayIndex:
@@ -437,7 +441,7 @@ class ReplayIndex:
             game = int(np.searchsorted(starts, count, side="right")) - 1
             frame = int(count - starts[game])
             count += 1
-            core: PinballEnv = env.unwrapped
+            core = unwrapped_pinball(env)
             self.scores[game].append(int(core.game.score[0]))
             if frame % every == 0:
                 rng = core.np_random.bit_generator.state
@@ -461,7 +465,7 @@ class ReplaySession(Session):
         self.env = make_recorded_env(
             recording.options, recording.max_episode_steps, recording.env_id
         )
-        self.core: PinballEnv = self.env.unwrapped
+        self.core = unwrapped_pinball(self.env)
         self.fps = _frame_rate(self.core)
         self.playing = False
         self.speed = 1.0
