@@ -177,8 +177,6 @@ KNOWN_OVER_LIMIT = {
     "pinball_env/game/multiball.py::after_frames",
     "pinball_env/game/state.py::make_game_state",
     "pinball_env/sim/world.py::play_holders",
-    "pinball_env/tools/web/stream.py::geometry",
-    "pinball_env/table/model.py",
     "pinball_env/sim/world.py",
     "pinball_env/physics/step.py",
     "pinball_env/physics/multiball.py",

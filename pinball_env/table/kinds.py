@@ -195,5 +195,7 @@ def element_ids(elements: Mapping[str, tuple[Any, ...]]) -> dict[str, range]:
 def static_shapes(table: Table) -> Iterator[Shape]:
     """The table's static layer, in the order it is painted (:data:`DRAW_ORDER`)."""
     for kind in DRAW_ORDER:
+        draws = kind.draws
+        assert draws is not None  # (DRAW_ORDER holds the kinds that draw)
         for element in getattr(table, kind.key):
-            yield from kind.draws(element, table)
+            yield from draws(element, table)

@@ -304,6 +304,7 @@ class Plunger:
 
     def launch_speed(self, pull: float) -> float:
         """Launch speed [m/s] of the player's plunger let go at ``pull`` (0 < pull <= stroke)."""
+        assert self.pull_speed is not None and self.stroke is not None  # (the player's plunger)
         low, high = self.pull_speed
         return low + (high - low) * pull / self.stroke
 
