@@ -114,8 +114,9 @@ def make_game_state(
         return np.zeros((n_envs, *shape), dtype=dtype)
 
     if several:
-        game_ball, game_ball_active = zeros(world.balls.shape[2], dtype=np.float64), zeros(
-            dtype=bool
+        game_ball, game_ball_active = (
+            zeros(world.balls.shape[2], dtype=np.float64),
+            zeros(dtype=bool),
         )
     else:
         game_ball, game_ball_active = world.balls[:, 0], world.active[:, 0]

@@ -231,9 +231,7 @@ def make_state(
     )
 
 
-def make_scratch(
-    geometry: Geometry, settings: Settings, n_envs: int, n_balls: int = 1
-) -> Scratch:
+def make_scratch(geometry: Geometry, settings: Settings, n_envs: int, n_balls: int = 1) -> Scratch:
     """The work arrays of the world step for ``n_envs`` envs of ``n_balls`` ball slots."""
     flippers = (n_envs, geometry.flippers.shape[0])
     slots = (n_envs, n_balls)

@@ -121,12 +121,7 @@ from pinball_env.physics.data import (
 )
 from pinball_env.physics.near import (
     NEAR_DROP_TARGETS,
-    NEAR_FLIPPERS,
     NEAR_SENSORS,
-    NEAR_SOLIDS,
-    gather_near,
-    near_reach,
-    path_in_zone,
 )
 from pinball_env.physics.step import (
     FLIPPER_CONTACT_TOLERANCE,
@@ -134,14 +129,13 @@ from pinball_env.physics.step import (
     MIN_PROGRESS,
     SETTLE_ROUNDS,
     deepest_overlap,
-    earliest_flipper_contact,
+    earliest_contact,
     earliest_static_contact,
     element_props,
     flipper_angle_at,
     flipper_end,
     flipper_motion,
     is_hit,
-    near_static_contact,
     respond,
     settle,
     surface_distance,
@@ -155,7 +149,6 @@ from pinball_env.physics.targets import (
     record_near_crossings,
     sensor_crossing,
     spin_spinner,
-    sweep_drop_targets,
     update_targets,
 )
 
@@ -393,30 +386,10 @@ def step_balls(geometry, settings, state, scratch, pair, env):
                 )
                 if ev[EV_VALID] == 0.0:
                     nr, ne = near[i], near_ends[i]
-                    if not path_in_zone(x, y, vx * remaining, vy * remaining, zone[i], r, skin):
-                        reach = near_reach(vx, vy, remaining, r, gravity, skin)
-                        gather_near(x, y, reach, geometry, nr, ne, zone[i])
-                    t, nx, ny, element = near_static_contact(
-                        x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
-                        circles, nr, ne[NEAR_SOLIDS],
+                    t, nx, ny, svx, svy, element, cut = earliest_contact(
+                        state, env, geometry, x, y, vx, vy, remaining, r, skin, gravity, tol,
+                        angles, omegas, pass_stops, nr, ne, zone[i], flipper_id,
                     )  # fmt: skip
-                    svx = svy = 0.0
-                    cut = False
-                    if n_flippers > 0:
-                        tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
-                            x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops,
-                            tol, nr, ne[NEAR_SOLIDS], ne[NEAR_FLIPPERS],
-                        )  # fmt: skip
-                        if tau < t * remaining:
-                            t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
-                            element = flipper_id + flipper
-                            cut = fnx == 0.0 and fny == 0.0
-                    if n_targets > 0:
-                        t, nx, ny, svx, svy, element, cut = sweep_drop_targets(
-                            state, env, geometry, x, y, vx * remaining, vy * remaining, r, t,
-                            nx, ny, svx, svy, element, cut, nr, ne[NEAR_FLIPPERS],
-                            ne[NEAR_DROP_TARGETS],
-                        )  # fmt: skip
                     used = remaining * min(t, 1.0)
                     if n_kickbacks > 0:  # a lit kickback's line on the way: it fires there
                         kicked, u = kickback_crossing(

@@ -345,6 +345,48 @@ def earliest_flipper_contact(
     return best_tau, best_nx, best_ny, best_svx, best_svy, best
 
 
+@njit(cache=True, inline="always")
+def earliest_contact(
+    state, env, geometry, x, y, vx, vy, remaining, r, skin, gravity, tol, angles, omegas,
+    pass_stops, near, near_ends, zone, flipper_id,
+):  # fmt: skip
+    """A pass's contact search, the one of every kernel: the earliest contact of a ball at
+    (x, y) moving at (vx, vy) for the ``remaining`` seconds of its substep with the walls and
+    posts, the flippers (at ``angles`` now, turning at ``omegas`` until ``pass_stops``) and
+    env ``env``'s standing drop targets of its candidate set (``near``, ``near_ends``, gathered
+    anew where the path leaves its ``zone``: ``physics.near``). Returns
+    ``(t, nx, ny, svx, svy, element, cut)``: ``t`` the fraction of the move (>= 1: none, then
+    ``element`` -1), the normal, the surface's velocity, the element id (``flipper_id`` the
+    first flipper's) and whether a flipper sweep ran out of slices (``cut``: the ball's substep
+    ends there). Ties go to the lower id. Inlined: with numba's reference counting off in the
+    kernels' entries (``_nrt=False``), its arrays cost nothing more than written out."""
+    dx, dy = vx * remaining, vy * remaining
+    if not path_in_zone(x, y, dx, dy, zone, r, skin):
+        reach = near_reach(vx, vy, remaining, r, gravity, skin)
+        gather_near(x, y, reach, geometry, near, near_ends, zone)
+    t, nx, ny, element = near_static_contact(
+        x, y, dx, dy, r, geometry.segments, geometry.segment_bounds, geometry.segment_one_sided,
+        geometry.circles, near, near_ends[NEAR_SOLIDS],
+    )  # fmt: skip
+    svx = svy = 0.0
+    cut = False
+    if geometry.flippers.shape[0] > 0:
+        tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
+            x, y, vx, vy, remaining, r, geometry.flippers, angles, omegas, pass_stops, tol,
+            near, near_ends[NEAR_SOLIDS], near_ends[NEAR_FLIPPERS],
+        )  # fmt: skip
+        if tau < t * remaining:  # a tie goes to the wall or post (lower id)
+            t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
+            element = flipper_id + flipper
+            cut = fnx == 0.0 and fny == 0.0  # the sweep ran out of slices
+    if geometry.drop_targets.shape[0] > 0:
+        t, nx, ny, svx, svy, element, cut = sweep_drop_targets(
+            state, env, geometry, x, y, dx, dy, r, t, nx, ny, svx, svy, element, cut, near,
+            near_ends[NEAR_FLIPPERS], near_ends[NEAR_DROP_TARGETS],
+        )  # fmt: skip
+    return t, nx, ny, svx, svy, element, cut
+
+
 # --- one ball ------------------------------------------------------------------------------------
 
 
@@ -518,33 +560,12 @@ def step_ball(geometry, settings, state, scratch, env, flipper_id):
                 for j in range(n_flippers):
                     angles[j] = flipper_angle_at(angle[env, j], omegas[j], stops[j], elapsed)
                     pass_stops[j] = max(stops[j] - elapsed, 0.0)
-                # The candidate set (``physics.near``): gathered anew where the path leaves
-                # its zone.
-                if not path_in_zone(x, y, vx * remaining, vy * remaining, zone, r, skin):
-                    reach = near_reach(vx, vy, remaining, r, gravity, skin)
-                    gather_near(x, y, reach, geometry, near, near_ends, zone)
-                t, nx, ny, element = near_static_contact(
-                    x, y, vx * remaining, vy * remaining, r, segments, bounds, one_sided,
-                    circles, near, near_ends[NEAR_SOLIDS],
+                t, nx, ny, svx, svy, element, cut = earliest_contact(
+                    state, env, geometry, x, y, vx, vy, remaining, r, skin, gravity, tol, angles,
+                    omegas, pass_stops, near, near_ends, zone, flipper_id,
                 )  # fmt: skip
-                svx = svy = 0.0
-                cut = False
-                if n_flippers > 0:
-                    tau, fnx, fny, fsvx, fsvy, flipper = earliest_flipper_contact(
-                        x, y, vx, vy, remaining, r, flippers, angles, omegas, pass_stops, tol,
-                        near, near_ends[NEAR_SOLIDS], near_ends[NEAR_FLIPPERS],
-                    )  # fmt: skip
-                    if tau < t * remaining:  # a tie goes to the wall or post (lower id)
-                        t, nx, ny, svx, svy = tau / remaining, fnx, fny, fsvx, fsvy
-                        element = flipper_id + flipper
-                        cut = fnx == 0.0 and fny == 0.0  # the sweep ran out of slices
                 kicked = -1
-                if has_targets:  # drop targets, spinners, kickbacks: see physics.targets
-                    t, nx, ny, svx, svy, element, cut = sweep_drop_targets(
-                        state, env, geometry, x, y, vx * remaining, vy * remaining, r, t, nx, ny,
-                        svx, svy, element, cut, near, near_ends[NEAR_FLIPPERS],
-                        near_ends[NEAR_DROP_TARGETS],
-                    )  # fmt: skip
+                if has_targets:  # spinners, kickbacks: see physics.targets
                     used = remaining * min(t, 1.0)
                     kicked, used = cross_target_lines(
                         state, env, geometry, x, y, vx, vy, used, k * h + h - remaining
