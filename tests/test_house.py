@@ -171,16 +171,6 @@ HOT_LOOPS = {
     "pinball_env/physics/multiball.py::step_balls",
     "pinball_env/game/play.py::play_step",
 }
-# Being split in issue 57 (on other branches): offenders tolerated until those land. An entry
-# that is no longer over its limit fails test_known_over_limit_is_still_over: remove it then.
-KNOWN_OVER_LIMIT = {
-    "pinball_env/game/multiball.py::after_frames",
-    "pinball_env/game/state.py::make_game_state",
-    "pinball_env/sim/world.py::play_holders",
-    "pinball_env/sim/world.py",
-    "pinball_env/physics/step.py",
-    "pinball_env/physics/multiball.py",
-}
 
 
 def functions_of(path: Path) -> dict[str, ast.FunctionDef | ast.AsyncFunctionDef]:
@@ -225,17 +215,9 @@ def test_no_function_or_module_is_over_its_limit():
     over = {
         name: f"{name}: {length} lines (limit {limit})"
         for name, (length, limit) in sizes().items()
-        if length > limit and name not in HOT_LOOPS | KNOWN_OVER_LIMIT
+        if length > limit and name not in HOT_LOOPS
     }
     assert not over, "over the house limits:\n" + "\n".join(sorted(over.values()))
-
-
-def test_known_over_limit_is_still_over():
-    found = sizes()
-    within = sorted(
-        name for name in KNOWN_OVER_LIMIT if name not in found or found[name][0] <= found[name][1]
-    )
-    assert not within, f"within the limits now (or gone): remove from KNOWN_OVER_LIMIT: {within}"
 
 
 @pytest.mark.parametrize("name", sorted(HOT_LOOPS))

@@ -113,7 +113,7 @@ class Game:
         rule_set = table.rules or RuleSet()
         self.event_names = rule_set.event_names
         # Several balls (a trough of more than one): game.multiball plays them around the
-        # frames' physics, which the compiled loop hands back (World.swept_kernel is False).
+        # frames' physics, in the compiled loop's frames (game.multiball_passes).
         several = self.world.n_balls > 1
         self.state = make_game_state(self.world.state, self.book, rule_set, len(table.flippers),
                                      ball_holders(self.world), several,
@@ -373,15 +373,17 @@ class Game:
         progress, params = self.progress, self.step_parameters()
         geometries, settings = self.world.tables.kernel_arrays()
         # With on_frame the loop hands each frame's physics to Python (the same kernel), and the
-        # hook sees the frame.
+        # hook sees the frame; so does a table of one ball with saucers or locks.
+        multi = self.multi
         swept = self.world.swept_kernel and self.on_frame is None
+        swept = swept and (multi is not None or not self.world.several)
+        several = (multi.memory, multi.parameters) if multi is not None else (None, None)
         args = (geometries, settings, self.state, self.world.scratch, progress, params, commands,
-                np.ascontiguousarray(cabinet), swept)  # fmt: skip
+                np.ascontiguousarray(cabinet), swept, *several)  # fmt: skip
         play = self._play.get(type(geometries))  # one table (tuples) or one per env (lists)
         if play is None:
             loop = play_frames if isinstance(geometries, tuple) else play_frames_per_env
             play = self._play[type(geometries)] = compiled_entry(loop, (*args, 0, 0))
-        multi = self.multi
         while True:
             self.world.threads.run(play, self.n_envs, *args)
             if not progress.finite.all():
@@ -394,6 +396,12 @@ class Game:
             if len(launches):
                 self.launch_balls(launches, rngs)
             progress.launch[:] = False
+            # The auto-plunger's launches the loop handed back (a draw each).
+            serves = np.flatnonzero(progress.serve)
+            if len(serves):
+                assert multi is not None  # (only a game of several balls serves)
+                multi.serve(serves, rngs)
+                progress.serve[:] = False
             # (Not swept) the backend's frame is due.
             physics = None if swept else progress.stage == PHYSICS
             if physics is not None and physics.any():
@@ -405,7 +413,7 @@ class Game:
                 progress.stage[physics] = AFTER_PHYSICS
                 if self.on_frame is not None:
                     self.on_frame()
-            elif len(launches) == 0:
+            elif len(launches) == 0 and len(serves) == 0:
                 break
 
     def out_of_time(self) -> np.ndarray:

@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from pinball_env.game.multiball_passes import before_physics, multiball_frame
 from pinball_env.game.rulebook import end_of_ball, run_rules
 from pinball_env.physics import first_flipper
 from pinball_env.physics.columns import (
@@ -51,6 +52,7 @@ class StepProgress(NamedTuple):
     frame_points: np.ndarray  # (N,) int64: points of the frame under way
     frame_drained: np.ndarray  # (N,) bool: the frame under way drained a ball
     launch: np.ndarray  # (N,) bool: waits for a ball off the plunger before it goes on
+    serve: np.ndarray  # (N,) bool: waits for the auto-plunger's launch of a queued ball
     plunge: np.ndarray  # (N,) bool: ... fired by the player's plunger (else by the machine)
     finite: np.ndarray  # (N,) bool: the ball state stayed finite
     skill_shot: np.ndarray  # (N,) bool: the skill shot was made in the step
@@ -69,7 +71,7 @@ NEW_STEP, NEXT_FRAME, PHYSICS, AFTER_PHYSICS, SEARCH, CLOSE_FRAME, STEP_DONE = r
 @njit(cache=True, nogil=True, _nrt=False)  # type: ignore[call-overload]  # _nrt: not in the stubs
 def play_frames(
     geometries, settings, state, scratch, progress, params, commands, cabinet_buttons, swept,
-    start, stop,
+    memory, several, start, stop,
 ):  # fmt: skip
     """:func:`play_step` with every env on one table (``geometries`` and ``settings`` tuples of
     one entry), compiled without reference counting (``_nrt=False``): numba counts a
@@ -77,18 +79,18 @@ def play_frames(
     record, which cost the step more than its physics (2.2 against 1.2 us per ball-frame on
     the classic table, measured). This loop allocates nothing, so it needs none."""
     play_step(geometries, settings, state, scratch, progress, params, commands, cabinet_buttons,
-              swept, start, stop)  # fmt: skip
+              swept, memory, several, start, stop)  # fmt: skip
 
 
 @njit(cache=True, nogil=True)
 def play_frames_per_env(
     geometries, settings, state, scratch, progress, params, commands, cabinet_buttons, swept,
-    start, stop,
+    memory, several, start, stop,
 ):  # fmt: skip
     """:func:`play_step` with each env on its own table (typed lists of ``geometries`` and
     ``settings``, one entry per env), which take numba's reference counting."""
     play_step(geometries, settings, state, scratch, progress, params, commands, cabinet_buttons,
-              swept, start, stop)  # fmt: skip
+              swept, memory, several, start, stop)  # fmt: skip
 
 
 # The one function here over 60 lines, by design, as ``step_ball``: every frame of a step in one
@@ -97,16 +99,21 @@ def play_frames_per_env(
 @njit(cache=True, inline="always")
 def play_step(
     geometries, settings, state, scratch, progress, params, commands, cabinet_buttons, swept,
-    start, stop,
+    memory, several, start, stop,
 ):  # fmt: skip
     """Take the step of envs ``start`` to ``stop`` on from where each is (``progress.stage``),
     each env's frames one after another, to its end (STEP_DONE), or to where it needs a launch
     (``progress.launch``, and ``progress.plunge`` for the player's plunger; Python draws it from
     the env's stream), or, unless ``swept``, the physics of a frame (PHYSICS; Python runs the
-    world's backend). With ``swept`` the physics
-    is the swept kernel's :func:`step_ball`, on ``geometries[env]`` and ``settings[env]`` (or
-    their only entries, see ``World.tables``); a ball state that is no longer finite ends the
-    env's step (``progress.finite``).
+    world's backend). With ``swept`` the physics is the swept kernel's: :func:`step_ball` on
+    ``geometries[env]`` and ``settings[env]`` (or their only entries, see ``World.tables``); or,
+    on a table of several balls (``several``, the ``MultiballParameters`` of
+    ``game.multiball_passes``, with ``memory`` the Multiball's; None for one ball, which
+    compiles that branch out), the passes before the physics (which hand the env back to
+    Python, ``progress.serve``, where the auto-plunger's launch is due: a draw from the env's
+    stream) and ``multiball_frame`` (the several-ball kernel, the saucers and locks, the drains,
+    the ball search of the other balls, the multiball's start and end). A ball state that is
+    no longer finite ends the env's step (``progress.finite``).
 
     A frame: the flipper commands (the action's for the first ``frame_skip`` frames, then
     released while the ball is above ``skip_heights``; with sticky actions, the last frame's
@@ -218,7 +225,14 @@ def play_step(
             elif now == PHYSICS:
                 if not swept:
                     break
-                if not step_ball(geometry, setting, world, scratch, env, flipper_id):
+                if several is not None:  # a game of several balls (None: compiled out)
+                    if before_physics(state, memory, several, env):
+                        progress.serve[env] = True  # Python draws the auto-plunger's launch
+                        break
+                    ok = multiball_frame(geometry, setting, state, scratch, memory, several, env)
+                else:
+                    ok = step_ball(geometry, setting, world, scratch, env, flipper_id)
+                if not ok:
                     finite[env] = False
                     stage[env] = STEP_DONE
                 else:
@@ -378,6 +392,7 @@ def new_progress(n_envs: int, repeat_draws: int = 0) -> StepProgress:
         frame_points=np.zeros(n_envs, dtype=np.int64),
         frame_drained=np.zeros(n_envs, dtype=bool),
         launch=np.zeros(n_envs, dtype=bool),
+        serve=np.zeros(n_envs, dtype=bool),
         plunge=np.zeros(n_envs, dtype=bool),
         finite=np.ones(n_envs, dtype=bool),
         skill_shot=np.zeros(n_envs, dtype=bool),

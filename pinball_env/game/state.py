@@ -108,59 +108,68 @@ def make_game_state(
         n_locks: the table's locks.
     """
     n_envs, n_balls = world.active.shape
-    n_rules = len(book.trigger_kind)
-
-    def zeros(*shape: int, dtype: type = np.int64) -> np.ndarray:
-        return np.zeros((n_envs, *shape), dtype=dtype)
-
     if several:
-        game_ball, game_ball_active = (
-            zeros(world.balls.shape[2], dtype=np.float64),
-            zeros(dtype=bool),
-        )
+        game_ball = np.zeros((n_envs, world.balls.shape[2]))
+        game_ball_active = np.zeros(n_envs, dtype=bool)
     else:
         game_ball, game_ball_active = world.balls[:, 0], world.active[:, 0]
+    shapes = _zero_shapes(world, book, rule_set, n_flippers, n_locks, n_balls if several else 0)
+    zeros = {
+        name: np.zeros((n_envs, *shape), dtype=dtype) for name, (shape, dtype) in shapes.items()
+    }
     return GameState(
         world=world,
         game_ball=game_ball,
         game_ball_active=game_ball_active,
-        balls_left=zeros(),
-        score=zeros(),
-        drain_height=zeros(dtype=np.float64),
-        points=zeros(),
-        drained=zeros(dtype=bool),
-        anchor=zeros(2, dtype=np.float64),
-        still_frames=zeros(),
-        frames=zeros(),
-        plunger_pull=zeros(dtype=np.float64),
-        on_plunger=zeros(dtype=bool),
-        nudge_wait=zeros(),
-        tilt_warnings=zeros(),
-        warning_age=zeros(),
-        skill_left=zeros(),
-        lane_frames=zeros(),
-        lights=zeros(len(rule_set.lights), dtype=bool),
-        counters=zeros(len(rule_set.counters)),
-        timers=zeros(len(book.timer_frames)),
-        bonus=zeros(),
         multiplier=np.ones(n_envs, dtype=np.int64),
-        save_frames=zeros(),
-        rule_points=zeros(),
-        rule_events=zeros(n_rules + 2),
-        lights_were_on=zeros(n_rules, dtype=bool),
-        flippers_before=zeros(n_flippers, dtype=bool),
-        pressed=zeros(world.flipper_command.shape[1] + len(CABINET_BUTTONS), dtype=bool),
         holders=holders,
         ball_slot=np.full(n_envs, -1, dtype=np.int64),
-        pending_balls=zeros(),
-        multiball=zeros(dtype=bool),
-        multiball_save=zeros(),
-        multiball_events=zeros(2),
-        multiballs=zeros(),
-        lock_release=zeros(n_locks, dtype=bool),
-        ball_anchor=zeros(n_balls if several else 0, 2, dtype=np.float64),
-        ball_still=zeros(n_balls if several else 0),
+        **zeros,
     )
+
+
+def _zero_shapes(
+    world: State, book: RuleBook, rule_set: RuleSet, n_flippers: int, n_locks: int, n_slots: int
+) -> dict[str, tuple[tuple[int, ...], type]]:
+    """The shape past the env axis and the dtype of each field of :class:`GameState` that
+    starts at zero."""
+    n_rules = len(book.trigger_kind)
+    count, real, flag = np.int64, np.float64, np.bool_
+    return {
+        "balls_left": ((), count),
+        "score": ((), count),
+        "drain_height": ((), real),
+        "points": ((), count),
+        "drained": ((), flag),
+        "anchor": ((2,), real),
+        "still_frames": ((), count),
+        "frames": ((), count),
+        "plunger_pull": ((), real),
+        "on_plunger": ((), flag),
+        "nudge_wait": ((), count),
+        "tilt_warnings": ((), count),
+        "warning_age": ((), count),
+        "skill_left": ((), count),
+        "lane_frames": ((), count),
+        "lights": ((len(rule_set.lights),), flag),
+        "counters": ((len(rule_set.counters),), count),
+        "timers": ((len(book.timer_frames),), count),
+        "bonus": ((), count),
+        "save_frames": ((), count),
+        "rule_points": ((), count),
+        "rule_events": ((n_rules + 2,), count),
+        "lights_were_on": ((n_rules,), flag),
+        "flippers_before": ((n_flippers,), flag),
+        "pressed": ((world.flipper_command.shape[1] + len(CABINET_BUTTONS),), flag),
+        "pending_balls": ((), count),
+        "multiball": ((), flag),
+        "multiball_save": ((), count),
+        "multiball_events": ((2,), count),
+        "multiballs": ((), count),
+        "lock_release": ((n_locks,), flag),
+        "ball_anchor": ((n_slots, 2), real),
+        "ball_still": ((n_slots,), count),
+    }
 
 
 def clear_game(

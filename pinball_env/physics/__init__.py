@@ -23,6 +23,7 @@ works on floats and arrays, and runs as plain Python with ``NUMBA_DISABLE_JIT=1`
 """
 
 from pinball_env.physics.balls import respond_ball_ball, sweep_ball_ball
+from pinball_env.physics.contact import deepest_overlap, respond
 from pinball_env.physics.data import (
     CONTACT_CAPACITY,
     Geometry,
@@ -45,7 +46,7 @@ from pinball_env.physics.flipper import (
     sweep_capsule,
     sweep_flipper,
 )
-from pinball_env.physics.step import deepest_overlap, respond, step_tables, step_world
+from pinball_env.physics.step import step_tables, step_world
 from pinball_env.physics.sweep import (
     point_segment_distance,
     sweep_circle,

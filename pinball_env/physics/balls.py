@@ -15,13 +15,13 @@ along the unit normal n from b to a. With ``wa``, ``wb`` their inverse masses in
 (1, or 0 for a ball held fixed in a lock or saucer), the normal impulse per unit mass is
 ``jn = -(1 + e) vn / (wa + wb)`` on the relative normal velocity ``vn = (va - vb).n < 0``; a
 gets ``+wa jn n`` and b ``-wb jn n``, so momentum is conserved (when neither is fixed) and the
-relative normal velocity after is ``-e vn``. Friction mirrors ``step.respond``: a Coulomb
+relative normal velocity after is ``-e vn``. Friction mirrors ``contact.respond``: a Coulomb
 impulse, at most ``friction jn``, that drives the slip of the contact points towards zero.
 """
 
 from numba import njit
 
-from pinball_env.physics.step import ROLLING_SHARE
+from pinball_env.physics.contact import ROLLING_SHARE
 from pinball_env.physics.sweep import sweep_point
 
 
@@ -60,7 +60,7 @@ def respond_ball_ball(avx, avy, aspin, bvx, bvy, bspin, nx, ny, r, restitution, 
 
     A ball held fixed (``a_fixed``, ``b_fixed``: in a lock or saucer) is of infinite mass: it
     keeps its velocity and spin, and the other bounces off it as off a post moving with it
-    (bitwise ``step.respond`` against a surface at rest, for a fixed ball at rest). Returns
+    (bitwise ``contact.respond`` against a surface at rest, for a fixed ball at rest). Returns
     ``(avx, avy, aspin, bvx, bvy, bspin)``; unchanged where the balls do not approach along n
     (``(va - vb).n >= 0``) or both are fixed.
 
@@ -83,7 +83,7 @@ def respond_ball_ball(avx, avy, aspin, bvx, bvy, bspin, nx, ny, r, restitution, 
     if vn >= 0.0 or w == 0.0:
         return avx, avy, aspin, bvx, bvy, bspin
     jn = -(1.0 + restitution) * vn / w  # normal impulse per unit mass
-    # The same order of operations as step.respond, so that a ball against a fixed ball at rest
+    # The same order of operations as contact.respond, so that a ball against a fixed ball at rest
     # is bitwise a ball against a post (multiplying by w, wa or wb = 1 is exact).
     avx += wa * jn * nx
     avy += wa * jn * ny

@@ -15,26 +15,17 @@ decided once, here, when the World is built: a table of several balls, or with s
 locks, is stepped by :func:`~pinball_env.physics.multiball.step_multiworld` (ball-ball contact,
 held balls), every other table by ``step_world`` (its slot 0).
 
-Saucers and locks are played here, at the end of each frame (after the physics, for either backend;
-every env in one compiled pass, :func:`play_holders`): a free ball in play within a saucer's
-``radius`` of its centre and slower than its ``capture_speed`` is captured (held at the centre, at
-rest), counted as a hit of the saucer (its element id follows the kickbacks: ``frame_points`` scores
-it) and released at its ``kick`` after ``hold_time``; a lock holds a ball that comes within
-``Lock.capture_radius`` of its next free slot (slots fill in order) slower than its
-``capture_speed``, a hit of the lock, until :meth:`World.release_lock` lets its balls go at its
-``kick``. A released ball is not captured again by the same saucer or lock until it has left its
-capture radius. The test is on the frame's end state (a ball slow enough to be captured moves less
-than a centimetre a frame).
+Saucers and locks are played at the end of each frame (after the physics, for either
+backend; every env in one compiled pass): ``sim.holders``.
 """
 
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, NamedTuple
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
-from numba import njit
 
 from pinball_env.physics import (
     CONTACT_CAPACITY,
@@ -53,8 +44,8 @@ from pinball_env.physics.columns import (
     CONTACT_TIME,
     FLIPPER_REST_ANGLE,
 )
-from pinball_env.physics.data import element_count, log_contact
 from pinball_env.physics.multiball import step_multiworld
+from pinball_env.sim.holders import holder_arrays, play_holders
 from pinball_env.sim.parallel import EnvThreads
 from pinball_env.sim.tables import EnvTables
 from pinball_env.table import BUTTONS, Table
@@ -87,170 +78,6 @@ def compiled_entry(function: Callable[..., Any], args: tuple) -> Callable[..., A
     return overloads[tuple(numba.typeof(arg) for arg in args)].entry_point
 
 
-class Holders(NamedTuple):
-    """A table's saucers and locks as :func:`play_holders` reads them (the table's numbers)."""
-
-    saucer_ids: np.ndarray  # (S,) int64: element ids
-    saucer_center: np.ndarray  # (S, 2) float64 [m]
-    saucer_radius: np.ndarray  # (S,) float64 [m]
-    saucer_capture: np.ndarray  # (S,) float64: capture speed [m/s]
-    saucer_hold: np.ndarray  # (S,) float64: hold time [s]
-    saucer_kick: np.ndarray  # (S, 2) float64 [m/s]
-    lock_ids: np.ndarray  # (K,) int64: element ids
-    lock_slots: np.ndarray  # (K, MAX_LOCK_SLOTS, 2) float64: the slots, in fill order [m]
-    lock_n_slots: np.ndarray  # (K,) int64: slots of each lock
-    lock_reach: np.ndarray  # (K,) float64: capture radius [m]
-    lock_capture: np.ndarray  # (K,) float64: capture speed [m/s]
-    lock_kick: np.ndarray  # (K, 2) float64 [m/s]
-
-
-def holder_arrays(table: Table, saucer_ids: np.ndarray, lock_ids: np.ndarray) -> Holders:
-    """``table``'s saucers and locks (element ids ``saucer_ids``, ``lock_ids``) as arrays."""
-    saucers, locks = table.saucers, table.locks
-    n_slots = max((len(lock.slots) for lock in locks), default=0)
-    slots = np.zeros((len(locks), n_slots, 2))
-    for k, lock in enumerate(locks):
-        slots[k, : len(lock.slots)] = lock.slots
-    r = table.ball.radius
-    return Holders(
-        saucer_ids=np.asarray(saucer_ids, dtype=np.int64),
-        saucer_center=np.array([s.center for s in saucers], dtype=np.float64).reshape(-1, 2),
-        saucer_radius=np.array([s.radius for s in saucers], dtype=np.float64),
-        saucer_capture=np.array([s.capture_speed for s in saucers], dtype=np.float64),
-        saucer_hold=np.array([s.hold_time for s in saucers], dtype=np.float64),
-        saucer_kick=np.array([s.kick for s in saucers], dtype=np.float64).reshape(-1, 2),
-        lock_ids=np.asarray(lock_ids, dtype=np.int64),
-        lock_slots=slots,
-        lock_n_slots=np.array([len(lock.slots) for lock in locks], dtype=np.int64),
-        lock_reach=np.array([lock.capture_radius(r) for lock in locks], dtype=np.float64),
-        lock_capture=np.array([lock.capture_speed for lock in locks], dtype=np.float64),
-        lock_kick=np.array([lock.kick for lock in locks], dtype=np.float64).reshape(-1, 2),
-    )
-
-
-@njit(cache=True)
-def _place(balls, active, held, holder, slot, held_time, released_from, env, ball, x, y, vx,
-           vy):  # fmt: skip
-    """``World.place_ball`` of a checked state: in play, free, at (x, y), (vx, vy), no spin."""
-    balls[env, ball, :] = 0.0
-    balls[env, ball, BALL_X], balls[env, ball, BALL_Y] = x, y
-    balls[env, ball, BALL_VX], balls[env, ball, BALL_VY] = vx, vy
-    active[env, ball] = True
-    holder[env, ball] = slot[env, ball] = -1
-    held_time[env, ball] = 0.0
-    held[env, ball] = False
-    released_from[env, ball] = -1
-
-
-@njit(cache=True)
-def _capture(balls, active, held, holder, slot, held_time, released_from, state, env, ball,
-             element, x, y, into, dt):  # fmt: skip
-    """Hold env ``env``'s ball ``ball`` at (x, y) for ``element`` (slot ``into`` of a lock): a
-    hit of it, logged at the frame's end (``World.hold_ball`` and the hit)."""
-    speed = math.hypot(balls[env, ball, BALL_VX], balls[env, ball, BALL_VY])
-    _place(balls, active, held, holder, slot, held_time, released_from, env, ball, x, y, 0.0, 0.0)
-    held[env, ball] = True
-    holder[env, ball], slot[env, ball] = element, into
-    state.hits[env, element] += 1
-    log_contact(state, env, element, dt, speed)
-
-
-# One body over every env, as the kernel's: the saucers, then the locks, each as the Python of
-# the first version did it table-wide (so the order of captures and releases is the same).
-@njit(cache=True)
-def play_holders(balls, active, held, holder, slot, held_time, released_from, state, stepped,
-                 holders, dt):  # fmt: skip
-    """The saucers and locks of every env at the end of a frame (module docstring), of the
-    frame's end state (``balls`` (N, M, 5) ...; ``state`` the kernel's, for the hits and the
-    contact log): in envs where ``stepped`` is set, a saucer's held ball counts ``dt`` and
-    leaves at the kick after its hold time, a free ball in play near a free saucer or the next
-    free slot of a lock, slower than its capture speed, is captured; in every env a ball
-    released from one is forgotten by it once out of its reach."""
-    n_envs, n_balls = active.shape
-    h = holders
-    xy = np.empty((n_balls, 2))
-    speed = np.empty(n_balls)
-    free = np.empty(n_balls, dtype=np.bool_)
-    taken = np.zeros(h.lock_slots.shape[1], dtype=np.bool_)
-    gaps = np.empty((n_balls, h.lock_slots.shape[1]))
-    for env in range(n_envs):
-        go = stepped[env]
-        for ball in range(n_balls):  # the frame's end state, before any capture or release
-            xy[ball, 0], xy[ball, 1] = balls[env, ball, BALL_X], balls[env, ball, BALL_Y]
-            speed[ball] = math.hypot(balls[env, ball, BALL_VX], balls[env, ball, BALL_VY])
-            free[ball] = active[env, ball] and not held[env, ball] and go
-        for s in range(len(h.saucer_ids)):
-            element = h.saucer_ids[s]
-            cx, cy = h.saucer_center[s, 0], h.saucer_center[s, 1]
-            if go:
-                for ball in range(n_balls):
-                    if holder[env, ball] == element:
-                        held_time[env, ball] += dt
-                for ball in range(n_balls):
-                    if holder[env, ball] == element and held_time[env, ball] >= (
-                        h.saucer_hold[s] - 1e-9
-                    ):
-                        _place(balls, active, held, holder, slot, held_time, released_from, env,
-                               ball, balls[env, ball, BALL_X], balls[env, ball, BALL_Y],
-                               h.saucer_kick[s, 0], h.saucer_kick[s, 1])  # fmt: skip
-                        released_from[env, ball] = element
-            catch = -1
-            for ball in range(n_balls):
-                near = math.hypot(xy[ball, 0] - cx, xy[ball, 1] - cy) <= h.saucer_radius[s]
-                if released_from[env, ball] == element and not near:
-                    released_from[env, ball] = -1
-                if (
-                    catch < 0
-                    and free[ball]
-                    and near
-                    and speed[ball] < h.saucer_capture[s]
-                    and released_from[env, ball] != element
-                ):
-                    catch = ball
-            if catch >= 0:
-                busy = False  # one ball at a time
-                for ball in range(n_balls):
-                    busy |= holder[env, ball] == element
-                if not busy:
-                    _capture(balls, active, held, holder, slot, held_time, released_from, state,
-                             env, catch, element, cx, cy, 0, dt)  # fmt: skip
-                    free[catch] = False
-        for k in range(len(h.lock_ids)):
-            element, reach, n_slots = h.lock_ids[k], h.lock_reach[k], h.lock_n_slots[k]
-            for ball in range(n_balls):
-                nearest = math.inf
-                for j in range(n_slots):
-                    gap = math.hypot(xy[ball, 0] - h.lock_slots[k, j, 0],
-                                     xy[ball, 1] - h.lock_slots[k, j, 1])  # fmt: skip
-                    gaps[ball, j] = gap
-                    nearest = min(nearest, gap)
-                if released_from[env, ball] == element and nearest > reach:
-                    released_from[env, ball] = -1
-            taken[:] = False
-            for ball in range(n_balls):
-                if holder[env, ball] == element:
-                    taken[slot[env, ball]] = True
-            for ball in range(n_balls):
-                if not (
-                    free[ball]
-                    and speed[ball] < h.lock_capture[k]
-                    and released_from[env, ball] != element
-                ):
-                    continue
-                into = -1
-                for j in range(n_slots):
-                    if not taken[j]:
-                        into = j
-                        break
-                if into < 0 or gaps[ball, into] > reach:
-                    continue
-                _capture(balls, active, held, holder, slot, held_time, released_from, state, env,
-                         ball, element, h.lock_slots[k, into, 0], h.lock_slots[k, into, 1], into,
-                         dt)  # fmt: skip
-                taken[into] = True
-                free[ball] = False
-
-
 def several_balls(table: Table) -> bool:
     """Whether ``table`` needs the several-ball kernel: a trough of several balls, saucers or
     locks (balls held in place, fixed circles to the others)."""
@@ -276,13 +103,14 @@ class World:
             results are bitwise the same for any count).
         n_balls: ball slots per env (``table.n_balls``: the trough's balls, else 1).
         several: the table has several balls, saucers or locks: the several-ball kernel
-            steps it (``swept_kernel`` False).
+            steps it.
         pair: the ball-ball material row (``table.pack_ball_pair()``).
     """
 
-    # Whether the physics is the swept kernel's ``step_ball``, which compiled loops over frames
-    # (the game's step) may call directly; a backend that swaps :meth:`_advance` says no, and so
-    # does a World on the several-ball kernel (several balls, saucers or locks).
+    # Whether the physics is the swept kernels' (``step_world``'s ``step_ball``, or with
+    # ``several`` ``step_multiworld``'s ``step_balls`` then ``sim.holders``), which compiled loops
+    # over frames (the game's step) may run themselves; a backend that swaps :meth:`_advance`
+    # says no.
     swept_kernel: ClassVar[bool] = True
 
     def __init__(self, table: Table, n_envs: int = 1, num_threads: int = 1) -> None:
@@ -300,18 +128,14 @@ class World:
         if self.several:
             hits = np.zeros((n_envs, len(table.element_scores)), dtype=np.int64)
             self.state = self.state._replace(hits=hits)  # the saucers' and locks' ids too
-            # The game's compiled loop must not call step_ball for it: it hands each frame
-            # to step() (the several-ball kernel, then the saucers and locks).
-            self.swept_kernel = False  # type: ignore[misc]
         # Saucers and locks, by element id (after every packed element); per ball: the element
         # holding it (-1: none), its slot in a lock, how long it has been held [s], and the
         # element it was last released from (not captured by it again until it is out of
         # reach; -1: none).
-        first = element_count(self.geometry)
-        self.saucer_ids = np.arange(first, first + len(table.saucers))
-        self.lock_ids = np.arange(first + len(table.saucers),
-                                  first + len(table.saucers) + len(table.locks))  # fmt: skip
-        self._holders = holder_arrays(table, self.saucer_ids, self.lock_ids)
+        self.saucer_ids, self.lock_ids = (
+            np.array(table.element_ids(kind), dtype=np.int64) for kind in ("saucers", "locks")
+        )
+        self.holders = holder_arrays(table, self.saucer_ids, self.lock_ids)
         shape = (n_envs, self.n_balls)
         self.holder = np.full(shape, -1, dtype=np.int64)
         self.slot = np.full(shape, -1, dtype=np.int64)
@@ -459,7 +283,7 @@ class World:
         stepped = self._everyone if envs is None else np.ascontiguousarray(envs, dtype=np.bool_)
         state = self.state
         play_holders(state.balls, state.active, state.held, self.holder, self.slot,
-                     self.held_time, self.released_from, self.state, stepped, self._holders,
+                     self.held_time, self.released_from, self.state, stepped, self.holders,
                      self.settings.dt)  # fmt: skip
 
     def launch_balls(

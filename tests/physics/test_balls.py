@@ -255,7 +255,7 @@ def test_separating_balls_are_left_alone():
 
 @pytest.mark.parametrize("e, mu", [(1.0, 0.0), (0.8, 0.0), (0.3, 0.4), (0.0, 1.0)])
 def test_a_fixed_ball_at_rest_is_a_post(e, mu):
-    # The other ball bounces off it as step.respond bounces a ball off a post: bitwise.
+    # The other ball bounces off it as contact.respond bounces a ball off a post: bitwise.
     n = (0.6, -0.8)
     va, sa = (-2.0, 3.5), 40.0
     post = respond(va[0], va[1], sa, n[0], n[1], 0.0, 0.0, R, e, mu, 0.0, 0.0)

@@ -16,8 +16,8 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
+from pinball_env.physics.contact import deepest_overlap
 from pinball_env.physics.multiball import make_multiball, place, step_multiball
-from pinball_env.physics.step import deepest_overlap
 from pinball_env.sim.world import World
 from pinball_env.table import builtin_tables_dir, load_table, table_from_dict
 

@@ -9,8 +9,8 @@ instead of the swept kernel: one ``pymunk.Space`` per env, built from the same v
   spin matches ours;
 - flippers are kinematic bodies made of the base circle, the tip circle and the quadrilateral
   between their tangent points, driven by exactly the same angle schedule as the kernel's
-  (the kernel's own :func:`~pinball_env.physics.step.flipper_motion` and
-  :func:`~pinball_env.physics.step.flipper_end`): in each substep the body turns at
+  (the kernel's own :func:`~pinball_env.physics.contact.flipper_motion` and
+  :func:`~pinball_env.physics.contact.flipper_end`): in each substep the body turns at
   the angular velocity that takes it from the kernel's start angle to its end angle;
 - materials map to ``elasticity`` (restitution) and ``friction``: the ball's own are 1, and
   pymunk multiplies the two shapes' values; kickers add their kick along the contact normal once
@@ -69,8 +69,8 @@ from pinball_env.physics.columns import (
     PROP_KICK,
     PROP_RESTITUTION,
 )
+from pinball_env.physics.contact import flipper_end, flipper_motion, is_hit
 from pinball_env.physics.data import first_drop_target, first_kickback, log_contact
-from pinball_env.physics.step import flipper_end, flipper_motion, is_hit
 from pinball_env.physics.targets import (
     count_kickbacks,
     kickback_crossing,
