@@ -79,3 +79,43 @@ def test_the_site_builds_strict(tmp_path):
         cwd=ROOT, capture_output=True, text=True, env={**os.environ, "NO_MKDOCS_2_WARNING": "1"},
     )  # fmt: skip
     assert result.returncode == 0, result.stderr[-3000:]
+
+
+def layout_sections() -> dict[str, str]:
+    """The house page's layout of ``pinball_env/``, by top-level entry (``name.py`` or ``name/``):
+    the lines each entry spans, its subfolders and modules among them."""
+    block = (ROOT / "docs" / "development.md").read_text(encoding="utf-8").split("## Layout", 1)[1]
+    lines = block.split("```", 2)[1].splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("pinball_env/"))
+    end = next(i for i, line in enumerate(lines) if i > start and not line.startswith(" "))
+    sections: dict[str, list[str]] = {}
+    entry = ""
+    for line in lines[start + 1 : end]:
+        if not line.startswith("   "):  # an entry at the package's top (two spaces in)
+            entry = line.split()[0]
+        sections.setdefault(entry, []).append(line)
+    return {entry: "\n".join(lines) for entry, lines in sections.items()}
+
+
+def test_the_house_page_names_every_module_and_only_those():
+    """docs/development.md's layout names each module of the package in its top-level entry
+    (each subpackage as ``name/``), and names no module that does not exist there."""
+    root = ROOT / "pinball_env"
+    sections = layout_sections()
+    missing = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root)
+        if path.name == "__init__.py" and len(rel.parts) <= 2:
+            continue  # the package itself, or a top-level package: its entry
+        entry = rel.parts[0] if len(rel.parts) == 1 else f"{rel.parts[0]}/"
+        name = f"{rel.parts[-2]}/" if path.name == "__init__.py" else path.name
+        if not re.search(rf"(?<![\w.]){re.escape(name)}(?![\w])", sections.get(entry, "")):
+            missing.append(str(rel))
+    assert not missing, f"docs/development.md's layout does not name: {missing}"
+    ghosts = [
+        (entry, name)
+        for entry, text in sections.items()
+        for name in re.findall(r"(?<![\w/.])(\w+\.py)\b", text)
+        if not list((root / entry if entry.endswith("/") else root).rglob(name))
+    ]
+    assert not ghosts, f"docs/development.md's layout names modules that do not exist: {ghosts}"
