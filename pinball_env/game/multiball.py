@@ -21,8 +21,9 @@ in one call), a new game. Another physics backend or the ``on_frame`` hook take 
 physics to Python (``World.step``) with the same passes over every env (:meth:`before_frame`,
 :meth:`after_frame`). The first version (per-env Python every frame, kept as the reference of
 ``tests/game/test_multiball_compiled.py``) ran Pinball-v3's native vector env of 1024 envs about
-9x slower; the second (the passes compiled over every env, each frame's physics handed to
-Python) about 2x slower than in the loop.
+9x slower than the second (the passes compiled over every env, each frame's physics handed to
+Python); the loop's own frames save that hand-back and its single-threaded passes, a small
+share of a frame: what bounds v3 now is the several-ball kernel itself (docs/speed.md).
 
 The rules of the balls:
 
