@@ -202,7 +202,32 @@ def test_the_compiled_passes_match_the_python_they_replaced(seed):
         both(compiled_after, lambda mask: reference_after_frame(multi, np.flatnonzero(mask)), envs)
 
     world._play_holders, multi.after_frame = holders, after
+    game.on_frame = lambda: None  # each frame's physics in Python: World.step and the passes
     for _ in range(60):
         game.step(stir_rng.integers(0, 3, N_ENVS), rngs)
     assert game.state.multiballs.sum() > 0 and world.state.hits[:, world.lock_ids].sum() > 0
     assert sum(checked) > 0
+
+
+def test_the_loops_own_frames_play_as_the_frames_handed_to_python():
+    """Pinball-v3's frames played in the compiled step loop (``multiball_passes``, env by env)
+    and handed to Python one at a time (``on_frame`` set: ``World.step`` and the all-env passes)
+    give bitwise the same games, multiballs, locks and serves included."""
+    games = [Game(TABLE, N_ENVS) for _ in range(2)]
+    games[1].on_frame = lambda: None
+    rngs = [[np.random.default_rng([7, env]) for env in range(N_ENVS)] for _ in games]
+    stirs = [np.random.default_rng(7) for _ in games]  # the same stirring of both
+    for game, streams in zip(games, rngs, strict=True):
+        for env in range(N_ENVS):
+            game.new_game(env, streams[env])
+    actions = np.random.default_rng(7)
+    for step in range(120):
+        step_actions = actions.integers(0, 32, N_ENVS)
+        for game, streams, stir_rng in zip(games, rngs, stirs, strict=True):
+            if step % 4 == 0:
+                stir(game, stir_rng)  # states random play rarely reaches: multiballs, locks
+            game.step(step_actions, streams)
+            for env in np.flatnonzero(game.state.balls_left == 0):
+                game.new_game(env, streams[env])
+        assert_same(arrays(games[1].state), arrays(games[0].state))
+    assert games[0].state.multiballs.sum() > 0

@@ -74,7 +74,7 @@ def test_several_balls_step_as_the_multiball_kernel_bitwise():
     world = World(table, 2)
     assert world.n_balls == 3 and world.balls.shape == (2, 3, 5)
     assert world.active.tolist() == [[True, False, False]] * 2
-    assert world.several and not world.swept_kernel
+    assert world.several and world.swept_kernel  # the game's loop steps it itself
     reference = make_multiball(table, 2, 3)
     threaded = World(table, 2, num_threads=2)  # bitwise the same on any number of threads
     starts = [((0.25, 0.6), (0.5, 1.0)), ((0.3, 0.7), (-0.4, 0.2)), ((0.2, 0.8), (0.0, -1.0))]
@@ -190,7 +190,7 @@ def test_a_lock_fills_its_slots_in_order_and_releases_them():
 def test_one_ball_with_a_saucer_takes_the_several_ball_kernel_in_one_slot():
     world = World(level_box(balls=1), 1)
     assert world.n_balls == 1 and world.several
-    assert not world.swept_kernel  # the game hands its frames to world.step
+    assert world.swept_kernel  # (a game of one ball hands its frames to world.step: Game)
     world.place_ball(0, (0.255, 0.30), (0.0, 0.3))
     assert frames_until(world, lambda: world.held[0, 0], 60) is not None
     assert world.balls[0, 0, :2].tolist() == [0.255, 0.50] and world.active[0, 0]
