@@ -195,15 +195,7 @@ def measure_multiball(n_balls: int, n_envs: int, frames: int, seed: int) -> Figu
     plunger = np.asarray(table.plunger.position)
     speeds = table.trough.auto_plunger.speed
     rng = np.random.default_rng(seed)
-    moving = np.ones(n_envs, dtype=np.bool_)
-    if getattr(world, "multi", None) is not None:  # a revision from before the ball slots
-        args = (world.geometry, world.settings, world.state, world.scratch, world.multi,
-                world.mscratch, world.pair, moving, 0, n_envs)  # fmt: skip
-        balls, active = world.multi.balls, world.multi.active
-    else:
-        args = (world.geometry, world.settings, world.state, world.scratch, world.pair, moving,
-                0, n_envs)  # fmt: skip
-        balls, active = world.balls, world.active
+    args, balls, active = multiball_kernel_args(world)
     reach = 3.0 * world.settings.radius
 
     def frame() -> float:
@@ -234,6 +226,20 @@ def measure_multiball(n_balls: int, n_envs: int, frames: int, seed: int) -> Figu
         relaunch(n_balls)
         seconds += frame()
     return {name: 1e6 * seconds / (n_envs * frames)}
+
+
+def multiball_kernel_args(world: World) -> tuple[tuple, np.ndarray, np.ndarray]:
+    """``step_multiworld``'s arguments stepping every env of ``world``, and its balls (N, M, 5)
+    and whether each is in play (N, M): the World's ball slots, or a revision's from before
+    them (``World.multi``)."""
+    moving, n_envs = np.ones(world.n_envs, dtype=np.bool_), world.n_envs
+    if getattr(world, "multi", None) is not None:
+        args = (world.geometry, world.settings, world.state, world.scratch, world.multi,
+                world.mscratch, world.pair, moving, 0, n_envs)  # fmt: skip
+        return args, world.multi.balls, world.multi.active
+    args = (world.geometry, world.settings, world.state, world.scratch, world.pair, moving, 0,
+            n_envs)  # fmt: skip
+    return args, world.balls, world.active
 
 
 def measure_tablegen(count: int, seed: int) -> Figures:

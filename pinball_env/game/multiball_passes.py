@@ -6,7 +6,7 @@ end and the game's ball picked again.
 Each pass is written for one env (``*_ball``/``*_frame``, inlined) so that the game's compiled
 step loop (``game.play``) plays a several-ball frame env by env, in its threads, handing back to
 Python only for a draw from an env's random stream (the auto-plunger's launch speed); the
-all-env passes (``written``, ``write_back_balls``, ``after_frames``, ``sync_balls``) serve the
+all-env passes (``write_back_balls``, ``after_frames``, ``before_frames``, ``sync_balls``) serve the
 Python path (another physics backend, the ``on_frame`` hook) with the same bodies.
 """
 
@@ -148,23 +148,6 @@ def sync_ball(state, memory, env, drained, first, end, plunger_x, lane_y):
     for column in range(proxy.shape[1]):
         memory.proxy[env, column] = proxy[env, column]
     memory.proxy_active[env] = proxy_active[env]
-
-
-@njit(cache=True)
-def written(proxy, active, memory):
-    """The envs (indices) whose game's ball (``proxy``, ``active``) the loop changed since it
-    was last written here (``memory``): a few a frame, which :meth:`Multiball.write_back`
-    carries over in Python."""
-    envs = np.empty(len(active), dtype=np.int64)
-    n = 0
-    for env in range(len(active)):
-        same = active[env] == memory.proxy_active[env]
-        for column in range(proxy.shape[1]):
-            same &= proxy[env, column] == memory.proxy[env, column]  # NaN: changed
-        if not same:
-            envs[n] = env
-            n += 1
-    return envs[:n]
 
 
 @njit(cache=True)
