@@ -4,6 +4,7 @@
 - :class:`Checkpoints`: a checkpoint every ``checkpoint_every`` env steps;
 - :class:`Validations`: the validation games every ``validate_every`` env steps;
 - :class:`KLAnchorPull`: the pull towards the warm start after each update;
+- :class:`EntropySchedule`: the entropy coefficient of the next update, on its schedule;
 - :class:`Budget`: the stop at ``total_frames``, after ``max_minutes`` or when asked;
 - :class:`Progress`: the games' scores and the frames logged, and the progress bar.
 
@@ -14,12 +15,13 @@ bar ends at the :class:`Budget`'s deadline.
 
 import collections
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
-from agents.config import TrainConfig
+from agents.config import TrainConfig, entropy_schedule
 from agents.envs import FrameCounter
 from agents.imitation import KLAnchor
 from agents.runs import CHECKPOINTS, ProgressBar, StopRequest, next_multiple, save_model
@@ -148,11 +150,32 @@ class Progress(BaseCallback):
             self.bar.score(float(np.mean(self.scores)))
 
 
+class EntropySchedule(BaseCallback):
+    """Set the entropy coefficient that the next update reads (``model.ent_coef``, which PPO's
+    and A2C's ``train`` read) from ``schedule`` of the progress left, once a rollout is
+    collected, and log it as ``train/ent_coef``. (The progress is stable-baselines3's own,
+    ``1 - num_timesteps / total_timesteps``, as it is about to update it for that rollout.)"""
+
+    def __init__(self, schedule: Callable[[float], float]) -> None:
+        super().__init__()
+        self.schedule = schedule
+
+    def _on_step(self) -> bool:
+        return True
+
+    def _on_rollout_end(self) -> None:
+        total = self.model._total_timesteps
+        coefficient = self.schedule(1.0 - float(self.num_timesteps) / float(total))
+        self.model.ent_coef = coefficient  # type: ignore[attr-defined]
+        self.logger.record("train/ent_coef", coefficient)
+
+
 class TrainingCallbacks(CallbackList):
     """The callbacks of a training, in the order each step runs them: the KL anchor's pull (with
-    ``kl_anchor``), checkpoints, validations (with ``validation``; none if ``validate_every`` is
-    0), the budget and the progress. ``frames``: those played so far (the frames are counted on
-    from them); the others as their callbacks take them."""
+    ``kl_anchor``), the entropy schedule (with one in the config), checkpoints, validations
+    (with ``validation``; none if ``validate_every`` is 0), the budget and the progress.
+    ``frames``: those played so far (the frames are counted on from them); the others as their
+    callbacks take them."""
 
     def __init__(
         self,
@@ -167,6 +190,9 @@ class TrainingCallbacks(CallbackList):
     ) -> None:
         self.budget = Budget(config, frames, started, stop)
         callbacks: list[BaseCallback] = [KLAnchorPull(kl_anchor)] if kl_anchor else []
+        schedule = entropy_schedule(config)
+        if schedule is not None:
+            callbacks.append(EntropySchedule(schedule))
         callbacks.append(Checkpoints(config, run))
         if validation is not None and config.validate_every:
             callbacks.append(Validations(config, validation, frames))

@@ -13,7 +13,9 @@ RLlib run (``agents.rllib``); both share :class:`EnvConfig` and the checks of th
 
 import copy
 import dataclasses
+import functools
 import inspect
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -424,8 +426,8 @@ def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
     taken -= {"self", "policy", "env", "seed", "device", "tensorboard_log", "verbose"}
     _check_options("hyperparams", config.hyperparams, taken, config.algo.upper(), fail)
     for key, value in config.hyperparams.items():
-        if isinstance(value, str) and key in SCHEDULES and linear_start(value) is None:
-            fail(f"hyperparams.{key}", f"a schedule is lin_X with X > 0, got {value!r}")
+        if isinstance(value, str) and key in SCHEDULES and schedule(value) is None:
+            fail(f"hyperparams.{key}", f"a schedule is lin_X or cos_X with X > 0, got {value!r}")
     image = config.env.kwargs.get("obs_type", "state") != "state"
     if image != (config.policy == "CnnPolicy"):
         obs_type = config.env.kwargs.get("obs_type", "state")
@@ -529,20 +531,28 @@ def _check_env(env: EnvConfig, fail: Callable[[str, str], None]) -> None:
         fail("env.kwargs", str(error))
 
 
-# stable-baselines3 options that take a schedule: "lin_X" (rl-zoo3's notation) is X decayed
-# linearly to 0 over the run's total_timesteps.
-SCHEDULES = ("learning_rate", "clip_range")
+# Options that take a schedule, X decayed to 0 over the run's total_timesteps: "lin_X" (rl-zoo3's
+# notation) linearly, "cos_X" along a half cosine (PufferLib's). stable-baselines3 takes a schedule
+# of the learning rate and the clip range itself; the entropy coefficient of PPO and A2C is set
+# before each update by ``callbacks.EntropySchedule`` (stable-baselines3 has no schedule of it).
+SCHEDULES = ("learning_rate", "clip_range", "ent_coef")
+SCHEDULE_SHAPES: dict[str, Callable[[float, float], float]] = {
+    "lin_": lambda start, left: left * start,
+    "cos_": lambda start, left: start * 0.5 * (1.0 - math.cos(math.pi * left)),
+}
 
 
-def linear_start(text: str) -> float | None:
-    """X of ``"lin_X"`` (a positive finite number), or None."""
-    if not text.startswith("lin_"):
-        return None
-    try:
-        start = float(text.removeprefix("lin_"))
-    except ValueError:
-        return None
-    return start if _positive(start) else None
+def schedule(text: str) -> Callable[[float], float] | None:
+    """The schedule ``"lin_X"`` or ``"cos_X"`` (X a positive finite number) as a function of
+    the progress left (1 at the start of the run, 0 at total_timesteps), or None."""
+    for prefix, shape in SCHEDULE_SHAPES.items():
+        if text.startswith(prefix):
+            try:
+                start = float(text.removeprefix(prefix))
+            except ValueError:
+                return None
+            return functools.partial(shape, start) if _positive(start) else None
+    return None
 
 
 def _positive(value: Any) -> bool:
@@ -551,18 +561,22 @@ def _positive(value: Any) -> bool:
 
 
 def sb3_hyperparams(config: TrainConfig) -> dict[str, Any]:
-    """The algorithm's keyword arguments, ``lin_X`` schedules made functions of the progress
-    left (1 at the start of the run, 0 at total_timesteps)."""
+    """The algorithm's keyword arguments, schedules made functions of the progress left (the
+    entropy coefficient's start: ``callbacks.EntropySchedule`` sets it on)."""
+    kwargs = {}
+    for key, value in config.hyperparams.items():
+        function = schedule(value) if key in SCHEDULES and isinstance(value, str) else None
+        if function is None:  # copies: an algorithm may fill in its kwargs (A2C's optimizer)
+            kwargs[key] = copy.deepcopy(value)
+        else:
+            kwargs[key] = function(1.0) if key == "ent_coef" else function
+    return kwargs
 
-    def linear(start: float) -> Callable[[float], float]:
-        return lambda progress_remaining: progress_remaining * start
 
-    return {  # copies: an algorithm may fill in its kwargs (A2C adds RMSprop to policy_kwargs)
-        key: linear(linear_start(value))
-        if key in SCHEDULES and isinstance(value, str)
-        else copy.deepcopy(value)
-        for key, value in config.hyperparams.items()
-    }
+def entropy_schedule(config: TrainConfig) -> Callable[[float], float] | None:
+    """The schedule of the entropy coefficient (``hyperparams.ent_coef`` a schedule), or None."""
+    value = config.hyperparams.get("ent_coef")
+    return schedule(value) if isinstance(value, str) else None
 
 
 def algorithm_class(name: str) -> type:

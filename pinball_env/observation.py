@@ -75,14 +75,17 @@ def flipper_names(table: Table) -> list[str]:
 _Row = tuple[str, float, float, str]
 
 
-def _ball_rows(table: Table, norm: bool) -> list[_Row]:
-    """One ball: its block; several (a trough): a block per ball slot, in slot order, each with
-    its flag (balls_observation)."""
+def _ball_rows(table: Table, norm: bool, ball_order: str = "slot") -> list[_Row]:
+    """One ball: its block; several (a trough): a block per ball slot, in slot order (or, with
+    ``ball_order`` ``"lowest"``, the lowest ball in play first), each with its flag
+    (balls_observation)."""
     speed = MAX_OBS_SPEED
     n_balls = table.n_balls
     rows: list[_Row] = []
     for i in range(n_balls):
         ball = "ball" if n_balls == 1 else f"ball {i}"
+        if n_balls > 1 and ball_order == "lowest":
+            ball = f"ball {i} (by urgency: in play lowest first, then held, then the trough's)"
         rows += [
             (f"{ball} x", 0.0, 1.0 if norm else table.width, "table widths" if norm else "m"),
             (f"{ball} y (up the table)", 0.0, 1.0 if norm else table.height,
@@ -175,10 +178,13 @@ class StateObserver:
     or held) and the standing drop targets (``physics.rays.cast_all_rays``).
     """
 
-    def __init__(self, game: Game, normalised: bool = False, rays: int = 0) -> None:
+    def __init__(
+        self, game: Game, normalised: bool = False, rays: int = 0, ball_order: str = "slot"
+    ) -> None:
         self.game = game
         self.normalised = normalised
         self.rays = rays
+        self.ball_order = ball_order
         low, high = self.bounds()
         self.space = spaces.Box(low, high, dtype=np.float32)
         self._ray_distances = np.zeros((game.n_envs, rays), dtype=np.float32)
@@ -192,7 +198,7 @@ class StateObserver:
         documentation's table of them is the space itself."""
         table, norm = self.game.table, self.normalised
         rows = [
-            *_ball_rows(table, norm),
+            *_ball_rows(table, norm, self.ball_order),
             *_flipper_rows(table, norm),
             ("ball in play (1) or game over (0)", 0.0, 1.0, ""),
             ("balls left, the one in play included", 0.0, float(self.game.balls_per_game), ""),
@@ -233,7 +239,7 @@ class StateObserver:
             obs[:, 4 : 4 + n] /= tables.flipper_swing
             obs[:, 4 + n : 4 + 2 * n] /= tables.flipper_top_speed
         if self.game.multi is not None:
-            block = balls_observation(self.game)
+            block = balls_observation(self.game, self.ball_order)
             if self.normalised:
                 block[:, 0::5] /= tables.width
                 block[:, 1::5] /= tables.height
@@ -391,18 +397,25 @@ def targets_view(game: Game, envs: slice, table: Table | None = None) -> Targets
 
 
 def make_observer(
-    game: Game, obs_type: str, image_size: tuple[int, int], normalised: bool, rays: int
+    game: Game,
+    obs_type: str,
+    image_size: tuple[int, int],
+    normalised: bool,
+    rays: int,
+    ball_order: str = "slot",
 ) -> Observer:
     """The observer of ``obs_type`` (``"state"``, ``"rgb"`` or ``"grayscale"``)."""
     if obs_type == "state":
-        return StateObserver(game, normalised, rays)
+        return StateObserver(game, normalised, rays, ball_order)
     return ImageObserver(game, image_size, grayscale=obs_type == "grayscale")
 
 
-def balls_observation(game: Game) -> np.ndarray:
-    """(n_envs, 5 M) float32: every ball slot of a game of several balls, in slot order: x, y,
-    vx, vy (clipped to +-MAX_OBS_SPEED) and its flag: 1 in play (on the table, or waiting on
-    the player's plunger), 0.5 held in a lock or saucer, 0 in the trough (x, y, vx, vy 0)."""
+def balls_observation(game: Game, ball_order: str = "slot") -> np.ndarray:
+    """(n_envs, 5 M) float32: every ball slot of a game of several balls, in slot order (or,
+    ``ball_order`` ``"lowest"``, the balls in play lowest first, then the held ones lowest
+    first, then the trough's, each group in slot order at equal heights): x, y, vx, vy (clipped
+    to +-MAX_OBS_SPEED) and its flag: 1 in play (on the table, or waiting on the player's
+    plunger), 0.5 held in a lock or saucer, 0 in the trough (x, y, vx, vy 0)."""
     world, state = game.world, game.state
     balls = world.balls
     n, m = balls.shape[:2]
@@ -417,6 +430,10 @@ def balls_observation(game: Game) -> np.ndarray:
     block[..., 3] = np.clip(balls[..., BALL_VY], -MAX_OBS_SPEED, MAX_OBS_SPEED)
     block[..., :4] = np.where((flag > 0.0)[..., None], block[..., :4], 0.0)  # no -0.0
     block[..., 4] = flag
+    if ball_order == "lowest":
+        rank = np.where(flag == 1.0, 0, np.where(flag == 0.5, 1, 2))
+        order = np.lexsort((block[..., 1], rank), axis=-1)  # by rank, then height
+        block = np.take_along_axis(block, order[..., None], axis=1)
     return block.reshape(n, 5 * m)
 
 

@@ -33,6 +33,11 @@ MAX_RAYS = 64
 GENERATED = "generated"
 OBS_TYPES = ("state", "rgb", "grayscale")
 ACTION_TYPES = ("discrete", "multibinary")
+# Which balls skip_above watches: the game's ball (the first in play), or every ball in play.
+SKIP_ABOVE_BALLS = ("first", "all")
+# The order of the state observation's ball blocks (tables of several balls): by slot, or the
+# lowest ball in play first (the one nearest the flippers: see ``observation.balls_observation``).
+BALL_ORDERS = ("slot", "lowest")
 RENDER_MODES = ("human", "rgb_array")
 from pinball_env.procgen import DIFFICULTIES, check_difficulty, layout_seeds  # noqa: E402
 
@@ -152,6 +157,9 @@ class PinballOptions(_Checked):
     """Frames per step (1-60), the action held on each."""
     skip_above: float = _option(0.0, checks.fraction)
     """0 (off), or a height in table heights (0-1) above which a step runs on, buttons released."""
+    skip_above_balls: str = _option("first", _choice(*SKIP_ABOVE_BALLS))
+    """Which balls ``skip_above`` watches: ``"first"`` (the game's ball, the first in play) or
+    ``"all"`` (the step runs on only while every free ball in play is above the height)."""
     repeat_action_probability: float = _option(0.0, checks.fraction)
     """Sticky actions (ALE v5's, Machado et al. 2018): each frame, with this probability (drawn
     from the env's own random stream), the buttons of the frame before are pressed instead of
@@ -176,6 +184,9 @@ class PinballOptions(_Checked):
     them as they were)."""
     rays: int = _option(0, _rays)
     """Ray distances from the ball appended to the state observation (0-64, 0: none)."""
+    ball_order: str = _option("slot", _choice(*BALL_ORDERS))
+    """The state observation's ball blocks (tables of several balls): ``"slot"`` (slot order)
+    or ``"lowest"`` (the balls in play lowest first, then the held ones, then the trough's)."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -187,6 +198,16 @@ class PinballOptions(_Checked):
         if self.rays and self.obs_type != "state":
             raise ValueError(
                 f"rays are part of the state observation, not of obs_type={self.obs_type!r}"
+            )
+        if self.ball_order != _default("ball_order") and self.obs_type != "state":
+            raise ValueError(
+                f"ball_order={self.ball_order!r} orders the state observation's ball blocks, "
+                f"not obs_type={self.obs_type!r}"
+            )
+        if self.skip_above_balls != _default("skip_above_balls") and not self.skip_above:
+            raise ValueError(
+                f"skip_above_balls={self.skip_above_balls!r} says which balls skip_above "
+                "watches: set skip_above too"
             )
         if not self.generated:
             given = [name for name in LAYOUT_OPTIONS if getattr(self, name) != _default(name)]
@@ -235,6 +256,7 @@ def split_options(owner: str, kwargs: Mapping[str, Any]) -> tuple[PinballOptions
 
 __all__ = [
     "ACTION_TYPES",
+    "BALL_ORDERS",
     "DIFFICULTIES",
     "GAME_FRAMES",
     "GENERATED",
@@ -242,6 +264,7 @@ __all__ = [
     "MAX_FRAME_SKIP",
     "MAX_RAYS",
     "OBS_TYPES",
+    "SKIP_ABOVE_BALLS",
     "PinballOptions",
     "VectorOptions",
     "split_options",

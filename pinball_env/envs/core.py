@@ -61,7 +61,12 @@ class PinballCore:
         threads = num_threads if options.physics == "swept" else 1
         self.game = Game(table, n_envs, options, threads)
         self.observer = make_observer(
-            self.game, options.obs_type, image_shape(options), options.generated, options.rays
+            self.game,
+            options.obs_type,
+            image_shape(options),
+            options.generated,
+            options.rays,
+            options.ball_order,
         )
         if options.action_type == "discrete":
             self.action_space: spaces.Space = spaces.Discrete(len(self.game.discrete_buttons))

@@ -127,7 +127,8 @@ class PinballEnv(CoreAttributes, gym.Env):
         obs, info = self.core.observe()[0], self.core.info(0)
         return obs, float(reward[0]), bool(game_over[0]), out_of_time, info
 
-    def render(self) -> np.ndarray | None:
+    # (gymnasium types render() with its RenderFrame type variable, which no env can bind)
+    def render(self) -> np.ndarray | None:  # type: ignore[override]
         if self.render_mode is None:
             gym.logger.warn(
                 "render() called without a render_mode; pass render_mode='rgb_array' or "

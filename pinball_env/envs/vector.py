@@ -231,7 +231,8 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
         self._ended = ended
         return obs, reward, terminated, truncated, infos
 
-    def render(self) -> tuple[np.ndarray, ...] | None:
+    # (gymnasium types render() with its RenderFrame type variable, which no env can bind)
+    def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override]
         """Every env's frame (the playfield and a scoreboard), for ``render_mode="rgb_array"``:
         each the frame of the single env."""
         if self.render_mode is None:

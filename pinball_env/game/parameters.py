@@ -31,6 +31,7 @@ class StepParameters(NamedTuple):
     skip_heights: np.ndarray  # (N,) float64: skip_above in metres
     frame_skip: int
     skip_frames: int  # most frames run on while the ball is high (0: skip_above is off)
+    skip_all_balls: bool  # skip_above watches every free ball in play, not the game's alone
     repeat_probability: float  # sticky actions: a frame repeats the last one's buttons (0: off)
     max_frames: int  # frames a game lasts (-1: no limit)
     search_frames: int  # still frames before a ball search
@@ -72,6 +73,7 @@ def make_step_parameters(
         skip_heights=options.skip_above * world.tables.height,
         frame_skip=options.frame_skip,
         skip_frames=MAX_RUN_ON_FRAMES if options.skip_above else 0,
+        skip_all_balls=options.skip_above_balls == "all",
         repeat_probability=options.repeat_action_probability,
         max_frames=-1 if options.max_frames is None else options.max_frames,
         search_frames=ball_search_frames(table),

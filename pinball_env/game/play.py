@@ -176,6 +176,9 @@ def play_step(
                 k = frames[env]
                 held = k < params.frame_skip
                 high = active[env] and balls[env, BALL_Y] > skip_heights[env]
+                if high and params.skip_all_balls:  # and every other free ball in play
+                    high = all_above(world.balls, world.active, world.held, env,
+                                     skip_heights[env])  # fmt: skip
                 if (
                     (params.max_frames >= 0 and game_frames[env] >= params.max_frames)
                     or (k > 0 and balls_left[env] == 0)  # the game ended in the step
@@ -326,6 +329,16 @@ def play_step(
                 stage[env] = NEXT_FRAME
             else:
                 break
+
+
+@njit(cache=True, inline="always")
+def all_above(balls, active, held, env, height):
+    """Whether every free ball in play of env ``env`` (``balls`` (N, M, 5), ``active``,
+    ``held`` (N, M)) is above ``height`` [m]."""
+    for ball in range(balls.shape[1]):
+        if active[env, ball] and not held[env, ball] and balls[env, ball, BALL_Y] <= height:
+            return False
+    return True
 
 
 @njit(cache=True)

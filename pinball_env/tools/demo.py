@@ -10,6 +10,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -63,7 +64,7 @@ def play(
         end = "game over" if terminated else "time limit"
         print(f"game {episode + 1}: score {info['score']:6d} after {steps} steps ({end})")
     if snapshot is not None and headless:
-        frame = env.render()
+        frame: Any = env.render()
         assert isinstance(frame, np.ndarray)  # (render_mode="rgb_array")
         save_png(frame, snapshot)
         print(f"wrote {snapshot}")

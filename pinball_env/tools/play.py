@@ -156,7 +156,7 @@ class _Screen:
         return None
 
     def show(self, env: gym.Env, banner: str | None) -> None:
-        frame = env.render()
+        frame: Any = env.render()
         assert isinstance(frame, np.ndarray)  # (render_mode="rgb_array")
         if banner is not None:
             frame = self._banner(frame, banner)

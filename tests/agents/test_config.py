@@ -5,10 +5,12 @@ import csv
 import dataclasses
 import sys
 
+import numpy as np
 import pytest
 import yaml
+from stable_baselines3 import PPO
 
-from agents.config import ConfigError, load_config, sb3_hyperparams
+from agents.config import ConfigError, load_config, sb3_hyperparams, schedule
 from tests.agents.tiny_runs import CONFIGS_DIR, ROOT, tiny_run
 
 
@@ -31,8 +33,19 @@ from tests.agents.tiny_runs import CONFIGS_DIR, ROOT, tiny_run
         (["device=toaster"], "device: not a torch device: 'toaster'"),
         (["seed"], "override 'seed' is not key=value"),
         (["max_minutes=-1"], "max_minutes: must be a number of minutes >= 0"),
-        (["hyperparams.learning_rate=lin_x"], "learning_rate: a schedule is lin_X with X > 0"),
-        (["hyperparams.clip_range=lin_-0.2"], "clip_range: a schedule is lin_X with X > 0"),
+        (
+            ["hyperparams.learning_rate=lin_x"],
+            "learning_rate: a schedule is lin_X or cos_X",
+        ),
+        (
+            ["hyperparams.clip_range=lin_-0.2"],
+            "clip_range: a schedule is lin_X or cos_X",
+        ),
+        (["hyperparams.ent_coef=cos_0"], "ent_coef: a schedule is lin_X or cos_X with X > 0"),
+        (
+            ["algo=dqn", "hyperparams={ent_coef: lin_0.01}"],
+            "ent_coef: not an option of DQN",
+        ),
         (["imitation_steps=-5"], "imitation_steps: must be an integer >= 0"),
         (["imitation_epochs=0"], "imitation_epochs: must be an integer >= 1"),
         (["imitation_learning_rate=-1e-3"], "imitation_learning_rate: must be a positive number"),
@@ -69,6 +82,36 @@ def test_linear_schedules_decay_to_zero_over_the_run(tmp_path):
         rates = [float(row["train/learning_rate"]) for row in csv.DictReader(file)
                  if row["train/learning_rate"]]  # fmt: skip
     assert rates == sorted(rates, reverse=True) and 0 < rates[-1] < rates[0] < 1e-3
+
+
+def test_a_cosine_schedule_falls_from_its_start_to_zero_along_a_half_cosine():
+    function = schedule("cos_0.02")
+    assert function(1.0) == 0.02 and function(0.0) == 0.0
+    assert function(0.5) == pytest.approx(0.01)
+    left = np.linspace(1.0, 0.0, 11)
+    assert (np.diff([function(x) for x in left]) < 0).all()
+
+
+def test_the_entropy_schedule_is_the_coefficient_each_update_reads(tmp_path, monkeypatch):
+    # stable-baselines3 has no entropy schedule; EntropySchedule sets model.ent_coef once a
+    # rollout is collected, and PPO's train() reads it: record what each update saw.
+    seen = []
+    train = PPO.train
+
+    def recording_train(self):
+        seen.append((self.num_timesteps, self.ent_coef))
+        train(self)
+
+    monkeypatch.setattr(PPO, "train", recording_train)
+    run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs",
+                   "hyperparams.ent_coef=lin_0.05", "total_timesteps=640")  # fmt: skip
+    assert len(seen) >= 3
+    for steps, coefficient in seen:
+        assert coefficient == pytest.approx(0.05 * (1.0 - steps / 640))
+    with open(run / "progress.csv") as f:
+        logged = [float(row["train/ent_coef"]) for row in csv.DictReader(f)
+                  if row.get("train/ent_coef")]  # fmt: skip
+    assert logged == pytest.approx([coefficient for _, coefficient in seen])
 
 
 @pytest.mark.parametrize(

@@ -6,6 +6,7 @@ import warnings
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from gymnasium.utils.env_checker import check_env
 
 import pinball_env
@@ -155,3 +156,40 @@ def test_the_frame_and_the_picture_show_every_ball():
         counts.append((first, ball_pixels(one.render() if one is env else obs)))
     for first, three in counts:
         assert first > 0 and three >= 2.5 * first
+
+
+def test_ball_order_lowest_puts_the_lowest_ball_in_play_first_and_keeps_each_block():
+    # The same game seen in slot order and lowest first: the blocks are the same blocks, the
+    # balls in play first by height, then the held ones, then the trough's; the space holds it.
+    slot_env = gym.make("Pinball-v3")
+    lowest_env = gym.make("Pinball-v3", ball_order="lowest")
+    n_balls = slot_env.unwrapped.table.n_balls
+    seen_orders = set()
+    for env in (slot_env, lowest_env):
+        env.reset(seed=3, options=ON_TABLE)
+        more_balls(env, 0)
+    rng = np.random.default_rng(0)
+    for _ in range(600):
+        action = int(rng.integers(8))
+        by_slot = slot_env.step(action)[0]
+        lowest = lowest_env.step(action)[0]
+        assert lowest_env.observation_space.contains(lowest)
+        blocks = by_slot[: 5 * n_balls].reshape(n_balls, 5)
+        ordered = lowest[: 5 * n_balls].reshape(n_balls, 5)
+        assert (by_slot[5 * n_balls :] == lowest[5 * n_balls :]).all()  # the rest as it was
+        assert sorted(map(tuple, blocks)) == sorted(map(tuple, ordered))  # the same blocks
+        rank = np.select([ordered[:, 4] == 1.0, ordered[:, 4] == 0.5], [0, 1], 2)
+        assert (np.diff(rank) >= 0).all()
+        for group in (0, 1):
+            heights = ordered[rank == group, 1]
+            assert (np.diff(heights) >= 0).all()
+        in_play = blocks[:, 4] == 1.0
+        if in_play.sum() > 1:
+            seen_orders.add(tuple(np.argsort(blocks[in_play, 1], kind="stable")))
+    assert len(seen_orders) > 1  # the balls in play changed places in the order
+    assert lowest_env.unwrapped.observation_rows[0].meaning.startswith("ball 0 (by urgency")
+
+
+def test_ball_order_is_refused_where_there_is_no_state_observation():
+    with pytest.raises(ValueError, match="ball_order"):
+        gym.make("Pinball-v3", obs_type="rgb", ball_order="lowest")

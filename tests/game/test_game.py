@@ -197,6 +197,24 @@ def test_skip_above_runs_on_with_the_buttons_released_while_the_ball_is_high():
     assert 0 < high_asks < 0.1 * 500 * n
 
 
+def test_skip_above_balls_all_plays_a_one_ball_game_as_first():
+    # On a table of one ball every free ball in play is the game's ball: the same game.
+    n = len(SEEDS)
+    games = [Game(CLASSIC, n_envs=n, skip_above=0.3, skip_above_balls=watched)
+             for watched in ("first", "all")]  # fmt: skip
+    rngs = [[np.random.default_rng(seed) for seed in SEEDS] for _ in games]
+    for game, game_rngs in zip(games, rngs, strict=True):
+        for env in range(n):
+            game.new_game(env, game_rngs[env])
+    for actions in random_actions("discrete", n, 300, seed=8):
+        results = [
+            game.step(actions, game_rngs) for game, game_rngs in zip(games, rngs, strict=True)
+        ]
+        assert results[0][0].tobytes() == results[1][0].tobytes()
+        assert games[0].world.balls.tobytes() == games[1].world.balls.tobytes()
+        assert (games[0].state.frames == games[1].state.frames).all()
+
+
 @pytest.mark.parametrize("num_threads", [1, 2])
 @pytest.mark.parametrize("framed_by", ["backend", "on_frame"])
 def test_the_compiled_step_loop_plays_the_frame_by_frame_loop_bitwise(num_threads, framed_by):

@@ -3,10 +3,12 @@ when the last ball in play drains), locks, the multiball's start and end, its ba
 jackpot lit only during a multiball, and random play that keeps every ball sound."""
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pinball_env.game import Game
+from pinball_env.game.parameters import MAX_RUN_ON_FRAMES
 from pinball_env.physics.columns import BALL_VX, BALL_VY, BALL_X, BALL_Y
 from pinball_env.procgen import generate_table
 from pinball_env.table import load_table, table_from_dict, table_to_dict
@@ -360,3 +362,31 @@ def test_tilted_the_games_ball_lying_still_is_given_up_while_another_plays_on():
     # Ball 1 plays on as the game's ball; no ball lost, none queued.
     assert game.state.ball_slot[0] == 1 and game.state.game_ball_active[0]
     assert game.state.balls_left[0] == 3 and game.state.pending_balls[0] == 0
+
+
+@pytest.mark.parametrize("watched", ["first", "all"])
+def test_skip_above_balls_all_hands_back_while_any_ball_in_play_is_low(watched):
+    # A step runs on past its frame only while the watched balls are above the line: "first"
+    # watches the game's ball (the first in play), "all" every free ball in play too, so only
+    # "all" hands back for another ball low while the game's ball is high.
+    line = 0.45 * TABLE.height
+    game = Game(TABLE, 1, skip_above=0.45, skip_above_balls=watched)
+    rng = np.random.default_rng(4)
+    game.new_game(0, rng, {"ball_position": (0.25, 0.5)})
+    state, world = game.state, game.world
+    for_another = 0
+    for step, action in enumerate(np.random.default_rng(5).integers(0, 2, size=3000)):
+        if step % 300 == 0:
+            state.pending_balls[0] = 2  # a multiball's balls (as add_balls queues them)
+        before = state.frames[0]
+        _, over = game.step(np.array([action]), [rng])
+        if over[0]:
+            break
+        if not 1 < state.frames[0] - before < 1 + MAX_RUN_ON_FRAMES:
+            continue  # it did not run on, or ran on as long as it may
+        free = world.active[0] & ~world.held[0]
+        any_low = (world.balls[0, free, BALL_Y] <= line).any()
+        game_ball_low = not state.game_ball_active[0] or state.game_ball[0, BALL_Y] <= line
+        assert game_ball_low or (watched == "all" and any_low)
+        for_another += not game_ball_low
+    assert (for_another > 0) == (watched == "all")
