@@ -32,8 +32,12 @@ from pinball_env.options import GAME_FRAMES, PinballOptions
 from pinball_env.protocol import EVAL_SEEDS, protocol_options
 from pinball_env.table import Table, load_any_table
 
-ALGORITHMS = ("ppo", "a2c", "dqn")
-POLICIES = ("MlpPolicy", "CnnPolicy")
+# stable-baselines3's algorithms and sb3-contrib's (RecurrentPPO: an LSTM policy; QRDQN: DQN
+# with a distribution of returns, quantile regression).
+ALGORITHMS = ("ppo", "a2c", "dqn", "recurrent_ppo", "qrdqn")
+POLICIES = ("MlpPolicy", "CnnPolicy", "MlpLstmPolicy")
+# The recurrent algorithm and its policy, which no other algorithm takes.
+RECURRENT = ("recurrent_ppo", "MlpLstmPolicy")
 # The options of gym.make_vec("Pinball-v0", ...) that are not PinballEnv's own, and those a
 # training config must not set (rendering, and the thread count, which `torch_threads` sets).
 VECTOR_ONLY_KWARGS = ("max_episode_steps",)
@@ -428,6 +432,9 @@ def _check_sb3(config: TrainConfig, fail: Callable[[str, str], None]) -> None:
     for key, value in config.hyperparams.items():
         if isinstance(value, str) and key in SCHEDULES and schedule(value) is None:
             fail(f"hyperparams.{key}", f"a schedule is lin_X or cos_X with X > 0, got {value!r}")
+    if (config.algo == RECURRENT[0]) != (config.policy == RECURRENT[1]):
+        fail("policy", f"{RECURRENT[0]} takes {RECURRENT[1]}, and only it does "
+                       f"(algo {config.algo}, policy {config.policy})")  # fmt: skip
     image = config.env.kwargs.get("obs_type", "state") != "state"
     if image != (config.policy == "CnnPolicy"):
         obs_type = config.env.kwargs.get("obs_type", "state")
@@ -580,13 +587,16 @@ def entropy_schedule(config: TrainConfig) -> Callable[[float], float] | None:
 
 
 def algorithm_class(name: str) -> type:
-    """stable-baselines3's class for an algorithm name (imported only now)."""
+    """stable-baselines3's (or sb3-contrib's) class for an algorithm name (imported only now)."""
+    import sb3_contrib
     import stable_baselines3
 
     return {
         "ppo": stable_baselines3.PPO,
         "a2c": stable_baselines3.A2C,
         "dqn": stable_baselines3.DQN,
+        "recurrent_ppo": sb3_contrib.RecurrentPPO,
+        "qrdqn": sb3_contrib.QRDQN,
     }[name]
 
 

@@ -9,6 +9,7 @@
     while not (terminated or truncated):
         obs, reward, terminated, truncated, info = env.step(policy.act(obs))
     print(info["score"])
+    policy.reset()  # before the next game (a recurrent agent's memory; nothing for the others)
 
 :func:`load_policy` takes a stable-baselines3 run folder (its ``model.zip``, or its newest
 checkpoint when training stopped before one was written), a model zip or checkpoint zip, or a
@@ -237,9 +238,17 @@ class Policy:
     def frame_stack(self) -> int:
         return self.config.env.frame_stack
 
+    def reset(self) -> None:
+        """A new game (or games) starts: a recurrent agent forgets what it remembers (its LSTM
+        state; nothing for the others). :meth:`act` carries that state from call to call."""
+        reset = getattr(self._act, "reset", None)
+        if reset is not None:
+            reset()
+
     def act(self, obs: np.ndarray, deterministic: bool = True) -> Any:
         """The action for one observation of the env chain (an int for discrete actions), or
-        the actions for a batch of them; greedy unless ``deterministic`` is false."""
+        the actions for a batch of them; greedy unless ``deterministic`` is false. A recurrent
+        agent's carries its memory from call to call: :meth:`reset` it at a new game."""
         obs = np.asarray(obs)
         single = obs.shape == self.observation_space.shape
         actions = self._act(obs[None] if single else obs, deterministic)
@@ -326,11 +335,37 @@ def _sb3_policy(model_path: Path) -> Policy:
     if config.env.normalize and config.env.kwargs.get("obs_type", "state") == "state":
         normalization = _sb3_statistics(model_path, entry)
     model = algorithm_class(config.algo).load(model_path, device=config.device)
+    return Policy(Predictor(model), model.observation_space, config, model_path, normalization,
+                  model)  # fmt: skip
 
-    def act(obs: np.ndarray, deterministic: bool) -> np.ndarray:
-        return model.predict(obs, deterministic=deterministic)[0]
 
-    return Policy(act, model.observation_space, config, model_path, normalization, model)
+class Predictor:
+    """A stable-baselines3 model's actions for a batch of observations, ``(obs, deterministic)
+    -> actions``. A recurrent model's (sb3-contrib's RecurrentPPO) carry its LSTM state from
+    call to call, each env's own, from a fresh state at the first call and after
+    :meth:`reset` (or when the batch changes size): call it once per step of the same envs,
+    and reset it where a new game starts in all of them."""
+
+    def __init__(self, model: Any) -> None:
+        self.model = model
+        self.recurrent = hasattr(model.policy, "lstm_actor")
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the recurrent state: the next call starts every env afresh."""
+        self._state: Any = None
+        self._batch = -1
+
+    def __call__(self, obs: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        if not self.recurrent:
+            return self.model.predict(obs, deterministic=deterministic)[0]
+        starts = np.full(len(obs), len(obs) != self._batch)
+        actions, self._state = self.model.predict(
+            obs, state=None if starts[0] else self._state, episode_start=starts,
+            deterministic=deterministic,
+        )  # fmt: skip
+        self._batch = len(obs)
+        return actions
 
 
 def _sb3_statistics(model_path: Path, entry: dict[str, Any] | None) -> ObsNormalization:

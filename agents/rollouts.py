@@ -13,7 +13,7 @@ import numpy as np
 
 from agents.config import AnyConfig, ConfigError, TrainConfig, config_from_dict
 from agents.envs import make_env_chain
-from agents.policy import ObsNormalization, load_policy
+from agents.policy import ObsNormalization, Predictor, load_policy
 from pinball_env.players import HeuristicPolicy, RandomPolicy
 
 BASELINES = ("random", "heuristic")
@@ -73,8 +73,10 @@ def baseline_policy(name: str, venv: Any, seed: int) -> VecPolicy:
 
 
 def model_policy(model: Any) -> VecPolicy:
-    """A stable-baselines3 model's greedy actions."""
-    return lambda obs, infos: model.predict(obs, deterministic=True)[0]
+    """A stable-baselines3 model's greedy actions (a recurrent one's from a fresh memory: one
+    game per env, as :func:`rollouts` plays)."""
+    predict = Predictor(model)
+    return lambda obs, infos: predict(obs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -106,6 +108,7 @@ def trained_player(path: Path) -> Player:
     torch.set_num_threads(trained.config.torch_threads)
 
     def policy(venv: Any, seed: int) -> VecPolicy:
+        trained.reset()  # new games
         return lambda obs, infos: trained.act(obs)
 
     return Player(str(path), trained.config, trained.normalization, policy, True)

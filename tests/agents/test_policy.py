@@ -114,3 +114,26 @@ def test_a_pixel_agent_plays_through_its_frame_stack(tmp_path):
     assert not obs[:3].any() and obs[3].any()  # zero-padded at the start, as VecFrameStack
     expected = evaluated_scores(run, tmp_path / "eval")
     assert [readme_example(run, 100_000 + game) for game in range(EPISODES)] == expected
+
+
+def test_a_recurrent_agent_carries_its_memory_from_step_to_step_until_reset(tmp_path):
+    # RecurrentPPO's LSTM state is threaded through act() as model.predict threads it by hand,
+    # each env its own, from a fresh memory at the first step and again after reset().
+    run = tiny_run(ROOT / "configs/agents/recurrent_ppo_v3.yaml", tmp_path / "runs")
+    policy = load_policy(run)
+    venv = policy.make_vec(2)
+    obs, _ = venv.reset(seed=[100_000, 100_001])
+    model, state, starts = policy.model, None, np.ones(2, dtype=bool)
+    first = None
+    for step in range(30):
+        expected, state = model.predict(obs, state=state, episode_start=starts, deterministic=True)
+        starts[:] = False
+        actions = policy.act(obs)
+        assert (actions == expected).all()
+        first = expected if first is None else first
+        obs = venv.step(actions)[0]
+    obs, _ = venv.reset(seed=[100_000, 100_001])
+    policy.reset()
+    assert (policy.act(obs) == first).all()  # a fresh memory, the same first games
+    assert policy._act.recurrent and policy._act._state is not None
+    venv.close()

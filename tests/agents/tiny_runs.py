@@ -17,6 +17,8 @@ TINY = {
     "ppo": ["hyperparams.n_steps=64", "hyperparams.batch_size=64"],
     "a2c": ["hyperparams.n_steps=8"],
     "dqn": ["hyperparams.learning_starts=64", "hyperparams.buffer_size=1000"],
+    "recurrent_ppo": ["hyperparams.n_steps=64", "hyperparams.batch_size=64"],
+    "qrdqn": ["hyperparams.learning_starts=64", "hyperparams.buffer_size=1000"],
 }
 
 
