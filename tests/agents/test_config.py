@@ -20,6 +20,8 @@ from tests.agents.tiny_runs import CONFIGS_DIR, ROOT, tiny_run
         (["algo=sac"], "algo: unknown algorithm 'sac'"),
         (["policy=LstmPolicy"], "policy: unknown policy 'LstmPolicy'"),
         (["policy=CnnPolicy"], "CnnPolicy does not fit obs_type 'state'"),
+        (["algo=recurrent_ppo"], "recurrent_ppo takes MlpLstmPolicy, and only it does"),
+        (["policy=MlpLstmPolicy"], "recurrent_ppo takes MlpLstmPolicy, and only it does"),
         (["totl_timesteps=5"], "unknown key 'totl_timesteps'"),
         (["env.kwargs.tabel=classic"], "env.kwargs.tabel: not a training option"),
         (["env.kwargs.table=nowhere"], "env.kwargs: unknown table 'nowhere'"),

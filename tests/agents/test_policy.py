@@ -125,7 +125,7 @@ def test_a_recurrent_agent_carries_its_memory_from_step_to_step_until_reset(tmp_
     obs, _ = venv.reset(seed=[100_000, 100_001])
     model, state, starts = policy.model, None, np.ones(2, dtype=bool)
     first = None
-    for step in range(30):
+    for _ in range(30):
         expected, state = model.predict(obs, state=state, episode_start=starts, deterministic=True)
         starts[:] = False
         actions = policy.act(obs)
