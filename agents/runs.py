@@ -358,13 +358,13 @@ def keep_progress(run: Path) -> int:
 
 def validation_rows(run: Path) -> list[dict[str, Any]]:
     """The rows of a run's ``validation.csv`` (none without one): ``steps`` and ``frames`` as
-    ints, the scores as floats."""
+    ints, the scores as floats (``score_iqm`` only in the rows of runs that recorded it)."""
     if not (run / VALIDATION_FILE).is_file():
         return []
     with open(run / VALIDATION_FILE) as file:
         return [
             {key: (int if key in ("steps", "frames") else float)(value)
-             for key, value in row.items()}
+             for key, value in row.items() if value not in ("", None)}  # (older: no IQM)
             for row in csv.DictReader(file)
         ]  # fmt: skip
 

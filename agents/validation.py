@@ -19,6 +19,7 @@ from agents.runs import (
     save_model,
     validation_rows,
 )
+from pinball_env import protocol
 
 
 class Validation:
@@ -29,7 +30,7 @@ class Validation:
     ``RUN/best_model.zip`` (a resumed run goes on from the rows already written)."""
 
     FIELDS = ("steps", "frames", "score_mean", "score_low", "score_high", "length_mean",
-              "truncated_share")  # fmt: skip
+              "truncated_share", "score_iqm")  # fmt: skip
 
     def __init__(self, config: TrainConfig, run: Path) -> None:
         self.config, self.run = config, run
@@ -51,7 +52,8 @@ class Validation:
             self.venv.training = False  # (before the reset, which would update them)
             self.venv.norm_reward = False
         self.venv.seed(games.start)  # the same games every time
-        summary = summarize(rollouts(self.venv, model_policy(model), list(games)))
+        played = rollouts(self.venv, model_policy(model), list(games))
+        summary = summarize(played)
         best = self.best
         row = {
             "steps": model.num_timesteps, "frames": frames,
@@ -60,6 +62,7 @@ class Validation:
             "score_high": round(summary["score_ci95"][1], 2),
             "length_mean": round(summary["length_mean"], 2),
             "truncated_share": summary["truncated_share"],
+            "score_iqm": round(protocol.iqm([game["score"] for game in played]), 2),
         }  # fmt: skip
         if best is None or row["score_mean"] > best["score_mean"]:
             save_model(model, self.run, BEST_MODEL, self.config)

@@ -280,6 +280,16 @@ def results(env_id: str = "") -> str:
     return markdown_table(methods)
 
 
+def curves(env_id: str = "") -> str:
+    """The learning curves' table (``docs/benchmark.json``'s validations), for one env or all."""
+    from agents.benchmark.curves import curves_table
+
+    published = json.loads(BENCHMARK.read_text())
+    methods = {name: result for name, result in published["methods"].items()
+               if not env_id or result["env_id"] == env_id}  # fmt: skip
+    return curves_table(methods)
+
+
 def references(_: str = "") -> str:
     """The protocol's reference scores (random and heuristic) per env."""
     published = json.loads(BENCHMARK.read_text())
@@ -303,6 +313,7 @@ GENERATORS: dict[str, Callable[[str], str]] = {
     "config-keys": config_keys,
     "pretrained": pretrained,
     "results": results,
+    "curves": curves,
     "references": references,
 }
 

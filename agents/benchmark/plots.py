@@ -1,16 +1,19 @@
-"""The benchmark's plots: every method's game scores and performance profiles, per env."""
+"""The benchmark's plots: every method's game scores, performance profiles and learning curves,
+per env."""
 
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from agents.benchmark.curves import draw_curves
 from pinball_env import protocol
 
 
 def plot_benchmark(methods: dict[str, Any], out: Path) -> None:
-    """``scores.png`` (every method's game scores, per env) and ``profiles.png`` (performance
-    profiles of the normalised scores with 95% bands, per env)."""
+    """``scores.png`` (every method's game scores, per env), ``profiles.png`` (performance
+    profiles of the normalised scores with 95% bands, per env) and ``curves.png`` (the learning
+    curves: ``curves.draw_curves``)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -28,9 +31,18 @@ def plot_benchmark(methods: dict[str, Any], out: Path) -> None:
                     for name, m in methods.items() if m["env_id"] == env_id}  # fmt: skip
             draw(ax, runs, env_id)
             ax.set_title(f"{env_id}, the protocol's games")
-        figure.tight_layout()
-        figure.savefig(out / f"{kind}.png", dpi=100)
-        plt.close(figure)
+        _save(plt, figure, out / f"{kind}.png")
+    figure, axes = plt.subplots(1, len(envs), figsize=(6.0 * len(envs), 4.0), squeeze=False)
+    for ax, env_id in zip(axes[0], envs, strict=True):
+        draw_curves(ax, methods, env_id)
+        ax.set_title(f"{env_id}, validation games")
+    _save(plt, figure, out / "curves.png")
+
+
+def _save(plt: Any, figure: Any, path: Path) -> None:
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
 
 
 def _draw_scores(ax: Any, runs: dict[str, list[np.ndarray]], env_id: str) -> None:

@@ -114,7 +114,7 @@ def merged_run(merged: Merged | None, name: str, seed: int | None) -> dict[str, 
 def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
     """A run's frames and steps trained, its minutes of training (the job's record, or for a run
     trained outside the benchmark, from its start to its model), its best validation score (its
-    model's), its commit and its config's digest."""
+    model's) and every validation (its learning curve), its commit and its config's digest."""
     meta = read_meta(run)
     rows = progress_rows(run)  # (a run from before meta.json's "trained": its last rollout's)
     trained = meta.get("trained") or {
@@ -124,14 +124,18 @@ def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
     }  # fmt: skip
     frames, steps = trained["frames"], trained["steps"]
     digest = config_digest(load_run_config(run))
-    validated = best_validation(validation_rows(run))
+    rows = validation_rows(run)
+    validated = best_validation(rows)
     seconds = job.get("train_seconds")
     if seconds is None:
         started = time.mktime(time.strptime(meta["started"], "%Y-%m-%dT%H:%M:%S"))
         seconds = (run / MODEL_FILE).stat().st_mtime - started
     return {"frames": frames, "steps": steps, "train_minutes": round(seconds / 60.0, 1),
             "validation": validated and validated["score_mean"], "commit": meta.get("commit"),
-            "config_digest": digest}  # fmt: skip
+            "config_digest": digest,
+            # The learning curve: each validation's frames, mean and IQM (null: not recorded).
+            "validations": [[row["frames"], row["score_mean"], row.get("score_iqm")]
+                            for row in rows]}  # fmt: skip
 
 
 def protocol_record(settings: JobSettings) -> dict[str, Any]:

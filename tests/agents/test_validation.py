@@ -9,6 +9,7 @@ import pytest
 from agents import evaluate, train
 from agents.envs import make_env_chain
 from agents.policy import load_policy
+from pinball_env import protocol
 from tests.agents.tiny_runs import ROOT, tiny_run
 
 
@@ -32,6 +33,9 @@ def test_validation_keeps_the_best_model_and_goes_on_after_a_resume(tmp_path, ca
     )
     assert np.mean([row["score"] for row in replayed]) == pytest.approx(
         float(best["score_mean"]), abs=0.01
+    )
+    assert protocol.iqm([row["score"] for row in replayed]) == pytest.approx(
+        float(best["score_iqm"]), abs=0.01
     )
     # Those games chose the model: they are not evaluation games.
     with pytest.raises(SystemExit):

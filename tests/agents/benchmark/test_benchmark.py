@@ -15,10 +15,11 @@ import yaml
 
 import agents.train
 from agents.benchmark import cli, jobs, methods, results, shipping
+from agents.benchmark.curves import curves_table, learning_curve
 from agents.config import ConfigError, load_config
 from agents.evaluate import main as evaluate_main
 from agents.policy import load_policy
-from agents.runs import MODEL_FILE
+from agents.runs import MODEL_FILE, validation_rows
 from pinball_env import protocol
 from pinball_env.recording import (
     GameRecord,
@@ -70,8 +71,42 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
     assert float(rows["ppo-v0"]["score_iqm"]) == pytest.approx(ppo["score_iqm"], abs=1e-3)
     with open(out / "runs.csv") as file:
         assert len(list(csv.DictReader(file))) == 3  # two PPO runs, one random
-    for picture in ("scores.png", "profiles.png"):
+    for picture in ("scores.png", "profiles.png", "curves.png"):
         assert (out / picture).stat().st_size > 10_000
+    for run in saved["methods"]["ppo-v0"]["runs"]:  # each validation: its frames, mean, IQM
+        rows = validation_rows(out / run["run"])
+        assert run["validations"] == [[r["frames"], r["score_mean"], r["score_iqm"]] for r in rows]
+        assert rows and run["validation"] == max(r["score_mean"] for r in rows)
+
+
+def test_a_learning_curve_is_the_mean_normalised_iqm_over_the_runs_at_each_validation():
+    reference = protocol.REFERENCE_SCORES["Pinball-v0"]
+    span = reference["heuristic"] - reference["random"]
+
+    def at(normalised):
+        return reference["random"] + normalised * span
+
+    runs = [  # frames, mean, IQM; the third run recorded no IQM (an older run): no curve
+        {"validations": [[100, 0.0, at(0.2)], [200, 0.0, at(0.6)]]},
+        {
+            "validations": [
+                [110, 0.0, at(0.4)],
+                [210, 0.0, at(1.0)],
+                [300, 0.0, at(1.2)],
+            ]
+        },
+        {"validations": [[100, 0.0, None]]},
+    ]
+    curve = learning_curve({"env_id": "Pinball-v0", "runs": runs})
+    assert [(frames, runs) for frames, *_, runs in curve] == [(105.0, 2), (205.0, 2), (300.0, 1)]
+    for (_, value, low, high, _), expected in zip(curve, (0.3, 0.8, 1.2), strict=True):
+        assert value == pytest.approx(expected)
+        assert low <= value <= high
+    assert curve[0][2] == pytest.approx(0.2) and curve[0][3] == pytest.approx(0.4)  # the seeds'
+    assert curve[2][2] == curve[2][3] == pytest.approx(1.2)  # one run: no spread
+    assert "| m | Pinball-v0 | 0.0M | 2 | 0.30 [" in curves_table(
+        {"m": {"env_id": "Pinball-v0", "runs": runs}}
+    )
 
 
 def test_a_method_on_the_long_budget_trains_its_config_ten_times_as_long(tmp_path):
