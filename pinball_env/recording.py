@@ -37,7 +37,6 @@ replay that does not end as recorded (the same score, frames and end) raises
 """
 
 import dataclasses
-import hashlib
 import json
 import os
 import re
@@ -48,7 +47,7 @@ from typing import Any, Protocol, runtime_checkable
 import gymnasium as gym
 
 from pinball_env import __version__  # importing the package registers the envs
-from pinball_env.table import Table, table_to_dict
+from pinball_env.table import Table, table_sha256
 from pinball_env.versions import ENV_VERSIONS, recordable_versions
 
 # The envs whose games may be recorded (and replayed), the play tool's default first.
@@ -109,12 +108,6 @@ class Recording:
             "table_sha256": self.table_sha256,
             "games": [dataclasses.asdict(game) for game in self.games],
         }
-
-
-def table_sha256(table: Table) -> str:
-    """A digest of everything a table file describes (its canonical JSON)."""
-    text = json.dumps(table_to_dict(table), sort_keys=True)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 def encode_action(action: int, version: int) -> str:

@@ -89,6 +89,18 @@ class Layouts:
             )
         return int(layout)
 
+    def upcoming(self, env: int) -> int | None:
+        """The layout drawn for env ``env``'s next game (None: none drawn yet)."""
+        return self._upcoming.get(env)
+
+    def set_upcoming(self, env: int, layout: int | None) -> None:
+        """Make ``layout`` env ``env``'s next game (None: drawn when it starts), as a saved
+        game has it (``envs.states``)."""
+        if layout is None:
+            self._upcoming.pop(env, None)
+        else:
+            self._upcoming[env] = self.check(layout)
+
     def pick(self, env: int, rng: np.random.Generator, chosen: object = None) -> int:
         """The layout of env ``env``'s next game: ``chosen`` (checked), or the one drawn for it
         at its last game. Then the one after is drawn; the next :meth:`tables` has it generated

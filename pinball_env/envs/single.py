@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 
 from pinball_env.envs.core import CoreAttributes, PinballCore
+from pinball_env.envs.states import PinballState, clone_env, restore_env
 from pinball_env.game import InvalidActions, action_meanings, discrete_action
 from pinball_env.options import PinballOptions
 from pinball_env.render import Window
@@ -126,6 +127,33 @@ class PinballEnv(CoreAttributes, gym.Env):
         out_of_time = bool(self.game.out_of_time()[0])
         obs, info = self.core.observe()[0], self.core.info(0)
         return obs, float(reward[0]), bool(game_over[0]), out_of_time, info
+
+    # --- saved games (envs.states) ------------------------------------------------------------
+
+    def clone_state(self, include_rng: bool = False) -> PinballState:
+        """The game as it is now, saved (``pinball_env.envs.states.PinballState``: every ball,
+        the flippers, the plunger, the cabinet and its bob, targets, lamps and rules, score,
+        balls and frames; opaque and picklable), for :meth:`restore_state`. The env's random
+        stream (``np_random``: sticky actions and launches draw from it) is saved only with
+        ``include_rng`` (ALE's ``cloneSystemState``); without it a restored game goes on
+        drawing from the stream the env has then."""
+        if not self._reset_done:
+            raise ResetNeeded("call reset() before clone_state(): no game has started")
+        return clone_env(self.core, 0, self._env_id, self.np_random if include_rng else None)
+
+    def restore_state(self, state: PinballState) -> tuple[np.ndarray, dict[str, Any]]:
+        """Put the game back as ``state`` (:meth:`clone_state`'s, of this env or another of the
+        same id, table, package version and balls: else a ValueError, and nothing changes), its
+        random stream too where ``state`` has it; returns the observation and info there, as
+        ``reset`` does. Stepped with the same actions (and draws), the game goes on bitwise as
+        it went on from where it was cloned."""
+        restore_env(self.core, 0, state, self._env_id, self.np_random)()
+        self._reset_done = True
+        return self.core.observe()[0], self.core.info(0)
+
+    @property
+    def _env_id(self) -> str | None:
+        return None if self.spec is None else self.spec.id
 
     # (gymnasium types render() with its RenderFrame type variable, which no env can bind)
     def render(self) -> np.ndarray | None:  # type: ignore[override]

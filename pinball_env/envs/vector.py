@@ -6,7 +6,7 @@ and kernel (physics) as the single env, over N envs in one call, on ``num_thread
 
 import functools
 import os
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,6 +19,7 @@ from gymnasium.vector.utils import batch_space
 
 from pinball_env.checks import is_int
 from pinball_env.envs.core import CoreAttributes, PinballCore
+from pinball_env.envs.states import PinballState, clone_env, restore_env
 from pinball_env.game import InvalidActions
 from pinball_env.options import split_options
 from pinball_env.table import Table
@@ -230,6 +231,60 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
             ended[:] = False
         self._ended = ended
         return obs, reward, terminated, truncated, infos
+
+    # --- saved games (envs.states) ------------------------------------------------------------
+
+    def clone_state(
+        self, indices: Sequence[int] | None = None, include_rng: bool = False
+    ) -> list[PinballState]:
+        """The games of envs ``indices`` (all by default) as they are now, saved, one
+        ``PinballState`` each (the single env's ``clone_state``, with each env's episode so
+        far), for :meth:`restore_state`; each env's random stream only with ``include_rng``."""
+        if not self._reset_done:
+            raise ResetNeeded("call reset() before clone_state(): no game has started")
+        envs = self._indices(indices)
+        states = []
+        for env in envs:
+            episode = (float(self._returns[env]), int(self._lengths[env]), bool(self._ended[env]))
+            rng = self._rngs[env] if include_rng else None
+            states.append(clone_env(self.core, env, self._env_id, rng, episode))
+        return states
+
+    def restore_state(
+        self, states: PinballState | Sequence[PinballState], indices: Sequence[int] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Put envs ``indices`` (all by default) back as ``states``: one state for each, or one
+        state copied into every one of them (a game branched into many). Every state is checked
+        first (another id, table, package version or balls: a ValueError, and nothing
+        changes). Returns every env's observations and infos. A single env's state starts a
+        new episode's return and length; a vector env's goes on with its own."""
+        envs = self._indices(indices)
+        if isinstance(states, PinballState):
+            states = [states] * len(envs)
+        states = list(states)
+        if len(states) != len(envs):
+            raise ValueError(f"{len(states)} states for {len(envs)} envs: one each, or one for all")
+        restores = [restore_env(self.core, env, state, self._env_id, self._rngs[env])
+                    for env, state in zip(envs, states, strict=True)]  # fmt: skip
+        for env, state, restore in zip(envs, states, restores, strict=True):
+            restore()
+            episode = state.episode or (0.0, 0, False)
+            self._returns[env], self._lengths[env], self._ended[env] = episode
+        self._reset_done = True
+        return self.core.observe(), self._infos()
+
+    def _indices(self, indices: Sequence[int] | None) -> list[int]:
+        if indices is None:
+            return list(range(self.num_envs))
+        envs = [int(env) for env in np.asarray(indices, dtype=np.int64).ravel()]
+        bad = [env for env in envs if not 0 <= env < self.num_envs]
+        if bad:
+            raise ValueError(f"env indices {bad} are not in [0, {self.num_envs})")
+        return envs
+
+    @property
+    def _env_id(self) -> str | None:
+        return None if self.spec is None else self.spec.id
 
     # (gymnasium types render() with its RenderFrame type variable, which no env can bind)
     def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override]

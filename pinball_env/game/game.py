@@ -195,6 +195,12 @@ class Game:
         if self.multi is not None:
             self.multi.remember_all()
 
+    def restored(self, env: int) -> None:
+        """Env ``env``'s rows of :attr:`state` were put back (a saved game, ``envs.states``):
+        what the game keeps beside them is taken from them again."""
+        if self.multi is not None:
+            self.multi.remember(env)
+
     # --- playing ------------------------------------------------------------------------------
 
     def new_game(

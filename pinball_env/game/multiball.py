@@ -250,21 +250,22 @@ class Multiball:
         state["_entries"] = {}  # compiled entries cannot be pickled; a copy finds its own
         return state
 
-    def _remember(self, env: int) -> None:
-        self._proxy[env] = self.state.game_ball[env]
-        self._proxy_active[env] = self.state.game_ball_active[env]
-
-    def remember_all(self) -> None:
-        """Take the game's balls as they are (after a restore): the game's ball is watched by
+    def remember(self, env: int) -> None:
+        """Take env ``env``'s balls as they are (after a restore): the game's ball is watched by
         the loop where it is the ball in play that the loop's ball is."""
         state, world = self.state, self.world
+        self._proxy[env] = state.game_ball[env]
+        self._proxy_active[env] = state.game_ball_active[env]
+        slot = int(state.ball_slot[env])
+        proxy = state.game_ball[env]
+        same = slot >= 0 and (proxy == world.balls[env, slot]).all()
+        watched = same and state.game_ball_active[env] and self.playing(env)[slot]
+        self._watching[env] = slot if watched else -1
+
+    def remember_all(self) -> None:
+        """:meth:`remember` of every env."""
         for env in range(self.world.n_envs):
-            self._remember(env)
-            slot = int(state.ball_slot[env])
-            proxy = state.game_ball[env]
-            same = slot >= 0 and (proxy == world.balls[env, slot]).all()
-            watched = same and state.game_ball_active[env] and self.playing(env)[slot]
-            self._watching[env] = slot if watched else -1
+            self.remember(env)
 
 
 def multiball_parameters(multi: Multiball, world: World, table: Table) -> MultiballParameters:

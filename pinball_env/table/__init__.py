@@ -51,7 +51,7 @@ from pinball_env.table.parts import (
     enclosure,
 )
 from pinball_env.table.schema import table_from_dict
-from pinball_env.table.serialise import table_to_dict
+from pinball_env.table.serialise import table_sha256, table_to_dict
 
 __all__ = [
     "BUTTONS",
@@ -82,5 +82,6 @@ __all__ = [
     "register_generator",
     "table_description",
     "table_from_dict",
+    "table_sha256",
     "table_to_dict",
 ]

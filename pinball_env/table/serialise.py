@@ -8,6 +8,8 @@ an older table writes, and digests, as it always did."""
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from dataclasses import fields
 from typing import Any
 
@@ -110,3 +112,22 @@ def rules_to_dict(rules: RuleSet) -> dict[str, Any]:
             for r in rules.rules
         ],
     }
+
+
+# Digests of the tables last digested, by identity (a table is immutable): a saved game's check
+# digests its env's table each time (envs.states), and a vector env's envs share one table.
+_DIGESTS: dict[int, tuple[Table, str]] = {}
+_DIGESTS_KEPT = 64
+
+
+def table_sha256(table: Table) -> str:
+    """A digest of everything a table file describes (its canonical JSON)."""
+    kept = _DIGESTS.get(id(table))
+    if kept is not None and kept[0] is table:
+        return kept[1]
+    text = json.dumps(table_to_dict(table), sort_keys=True)
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    if len(_DIGESTS) >= _DIGESTS_KEPT:
+        _DIGESTS.clear()
+    _DIGESTS[id(table)] = (table, digest)
+    return digest
