@@ -297,6 +297,14 @@ class HeuristicPolicy:
         self._held = [0] * len(self._held)
         self._shoves = []
 
+    def fork(self) -> "HeuristicPolicy":
+        """A copy that goes on from this one's state (its flippers held, its nudges given),
+        apart from it (a planner's branches: ``players.search``)."""
+        copy = object.__new__(HeuristicPolicy)
+        copy.__dict__.update(self.__dict__)
+        copy._held, copy._shoves = list(self._held), list(self._shoves)
+        return copy
+
     def _flip(self, j: int, x: float, y: float, vx: float, vy: float) -> bool:
         """Whether a resting flipper ``j`` should flip now at the ball (x, y), (vx, vy)."""
         face = self._rest[j]

@@ -1,0 +1,81 @@
+"""The planner (``players.search.SearchPolicy``): it looks ahead without touching the game it
+plays (its state or its random stream), plays the heuristic's action where there is nothing
+to choose, chooses the best branch, and refuses bad settings."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from pinball_env.players import HeuristicPolicy, SearchPolicy, SearchSettings
+
+SMALL = SearchSettings(horizon=6, holds=(2,))
+
+
+def test_bad_settings_are_refused():
+    for bad, message in (({"horizon": 0}, "horizon"), ({"holds": (9,), "horizon": 5}, "holds"),
+                         ({"low": 1.5}, "low"), ({"decide_every": 0}, "decide_every")):  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            SearchSettings(**bad)
+
+
+@pytest.mark.parametrize("env_id", ["Pinball-v3", "Pinball-v0"])
+def test_the_look_ahead_leaves_the_game_and_its_stream_as_they_are(env_id):
+    # The game played with the planner is the game played with the actions it chose: its
+    # look-ahead changes nothing of the env (state or stream) between two steps.
+    env = gym.make(env_id, repeat_action_probability=0.25)
+    replay = gym.make(env_id, repeat_action_probability=0.25)
+    player = SearchPolicy(env, SMALL)
+    _, info = env.reset(seed=100_000)
+    replay.reset(seed=100_000)
+    for _ in range(400):
+        stream = env.unwrapped.np_random.bit_generator.state
+        action = player(info)
+        assert env.unwrapped.np_random.bit_generator.state == stream
+        assert action in range(env.action_space.n)
+        obs, _, terminated, truncated, info = env.step(action)
+        assert (replay.step(action)[0] == obs).all()
+        if terminated or truncated:
+            break
+    assert player.decisions > 0 and player.branch_steps > 0
+    player.close()
+
+
+def test_where_no_ball_is_low_it_plays_the_heuristics_action():
+    env = gym.make("Pinball-v3")
+    player = SearchPolicy(env, SearchSettings(horizon=4, holds=(1,), low=0.0))  # never low
+    heuristic = HeuristicPolicy(env.unwrapped.table)
+    _, info = env.reset(seed=3)
+    for _ in range(300):
+        action = player(info)
+        assert action == heuristic(info)
+        info = env.step(action)[4]
+    assert player.decisions == 0
+
+
+def test_the_chosen_action_is_the_first_of_the_best_branch():
+    # Scored by hand: each candidate's branch played out from the saved game (a flipper action
+    # held for the whole horizon, or the heuristic throughout), its points less the drain cost
+    # of its lost balls; the planner plays the first action of the best (the heuristic's first).
+    env = gym.make("Pinball-v3")
+    settings = SearchSettings(horizon=10, holds=(10,), drain_cost=1e6)
+    player = SearchPolicy(env, settings)
+    _, info = env.reset(seed=11)
+    for _ in range(3000):  # on to a ball falling towards the flippers
+        if player._low(info) and info["ball_velocity"][1] < -0.5:
+            break
+        info = env.step(player(info))[4]
+    state = env.unwrapped.clone_state()
+    scripted = player.heuristic.fork()
+    chosen = player(info)
+    values = []
+    for action, _ in settings.candidates:
+        branch = gym.make("Pinball-v3")
+        branch.reset(seed=0)
+        _, start = branch.unwrapped.restore_state(state)
+        script, seen = scripted.fork(), info
+        for _ in range(settings.horizon):
+            seen = branch.step(action if action >= 0 else int(script(seen)))[4]
+        values.append(seen["score"] - start["score"]
+                      - 1e6 * (start["balls_left"] - seen["balls_left"]))  # fmt: skip
+    best = settings.candidates[int(np.argmax(values))][0]
+    assert chosen == (int(scripted.fork()(info)) if best < 0 else best)
