@@ -50,6 +50,10 @@ MAX_OBS_CABINET_SPEED = 1.0
 # The rules' rows give the bonus in thousands of points and counters as counts, clipped to these.
 MAX_OBS_BONUS = 100.0
 MAX_OBS_COUNT = 100.0
+# The balls left row is clipped to the balls of a game plus this many: the rules' extra balls
+# have no bound (a counter's rule fires again each time it reaches its count), a game's rarely
+# more than one.
+MAX_OBS_EXTRA_BALLS = 9
 
 
 @dataclass(frozen=True)
@@ -128,7 +132,10 @@ def _cabinet_rows(table: Table, norm: bool) -> list[_Row]:
          cabinet_speed, "m/s"),
         (f"cabinet velocity y (clipped to +-{cabinet_speed:g})", -cabinet_speed,
          cabinet_speed, "m/s"),
-        ("tilt warnings standing", 0.0, tilt.warnings + 1.0, ""),
+        # The touches of the frame that tilts all count: up to one a substep past the last
+        # warning allowed.
+        ("tilt warnings standing (past the allowed ones: tilted)", 0.0,
+         float(tilt.warnings + table.simulation.substeps), ""),
         ("tilted (1) or not (0)", 0.0, 1.0, ""),
     ]  # fmt: skip
 
@@ -201,7 +208,13 @@ class StateObserver:
             *_ball_rows(table, norm, self.ball_order),
             *_flipper_rows(table, norm),
             ("ball in play (1) or game over (0)", 0.0, 1.0, ""),
-            ("balls left, the one in play included", 0.0, float(self.game.balls_per_game), ""),
+            (
+                f"balls left, the one in play included (clipped to the game's balls + "
+                f"{MAX_OBS_EXTRA_BALLS}: extra balls)",
+                0.0,
+                float(self.game.balls_per_game + MAX_OBS_EXTRA_BALLS),
+                "",
+            ),
         ]
         if self.game.cabinet:  # as cabinet_observation
             rows += _cabinet_rows(table, norm)
@@ -230,7 +243,8 @@ class StateObserver:
         game = self.game.state
         obs = state_observation(
             game.game_ball, state.flipper_angle, state.flipper_omega, self.game.in_play,
-            game.balls_left, tables.flipper_rest, tables.flipper_up_sign,
+            np.minimum(game.balls_left, self.game.balls_per_game + MAX_OBS_EXTRA_BALLS),
+            tables.flipper_rest, tables.flipper_up_sign,
         )  # fmt: skip
         if self.normalised:
             n = tables.flipper_swing.shape[1]

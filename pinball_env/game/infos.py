@@ -1,7 +1,8 @@
 """What the envs report after a step: the per-step infos of a :class:`~pinball_env.game.Game`,
 of every env as arrays (:func:`batch_infos`) or of one env as Python numbers
-(:func:`env_info`)."""
+(:func:`env_info`), and the range of each of their numbers (:func:`info_ranges`)."""
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -126,3 +127,47 @@ def _cabinet_infos(game: "Game", envs: int | slice) -> dict[str, Any]:
         "cabinet_offset": world.cabinet[envs, CABINET_X : CABINET_Y + 1].copy(),
         "skill_shot": progress.skill_shot[envs].copy(),
     }
+
+
+# The ranges of the infos' numbers (info_ranges): a count or a score is an integer from 0 up.
+_COUNT = (0.0, math.inf)
+
+
+def info_ranges(
+    game: "Game", env: int = 0, max_frames: int | None = None
+) -> dict[str, tuple[Any, Any]]:
+    """The documented range [low, high] of every number of the infos of env ``env`` of ``game``
+    (each entry of an array entry in it; a pair of (x, y) for positions), for every play: the
+    ball's position on its table (the ball slots' too, wherever they lie), the
+    counts from 0, the tilt warnings up to the allowed ones plus the touches of the frame that
+    tilts (one a substep), the plunger's pull up to its stroke, the bonus multiplier from 1 to
+    its most, the frames up to ``max_frames`` (the game's time, where it has one). Velocities and
+    the cabinet's offset are only finite (the ball's speed has no bound the game keeps). Flags
+    are 0 or 1; ``events`` and ``rule_events`` of the single env are name -> count."""
+    table = game.world.table_of(env)
+    frames = (0.0, math.inf if max_frames is None else float(max_frames))
+    finite = (-math.inf, math.inf)
+    ranges = {
+        "ball_position": ((0.0, 0.0), (table.width, table.height)),
+        "ball_velocity": finite,
+        "score": _COUNT, "balls_left": _COUNT, "points": _COUNT, "drained": (0.0, 1.0),
+        "frames": frames,
+    }  # fmt: skip
+    if game.cabinet:
+        assert table.tilt is not None and table.plunger is not None  # (the cabinet's)
+        warnings = table.tilt.warnings + table.simulation.substeps
+        ranges.update({
+            "tilt_warnings": (0.0, float(warnings)), "tilted": (0.0, 1.0),
+            "ball_on_plunger": (0.0, 1.0), "plunger_pull": (0.0, float(table.plunger.stroke or 0)),
+            "cabinet_offset": finite, "skill_shot": (0.0, 1.0),
+        })  # fmt: skip
+    if game.book.active:
+        ranges.update({"rule_events": _COUNT, "bonus": _COUNT, "rule_score": _COUNT,
+                       "bonus_multiplier": (1.0, float(game.book.max_multiplier))})  # fmt: skip
+    if game.multi is not None:
+        ranges.update({
+            "ball_positions": ranges["ball_position"], "ball_velocities": finite,
+            "balls_in_play": (0.0, 1.0), "balls_locked": (0.0, float(game.world.n_balls)),
+            "multiball": (0.0, 1.0), "multiballs": _COUNT,
+        })  # fmt: skip
+    return ranges
