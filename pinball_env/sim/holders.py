@@ -6,8 +6,11 @@ element id follows the kickbacks: ``World.frame_points`` scores it) and released
 after ``hold_time``; a lock holds a ball that comes within ``Lock.capture_radius`` of its next
 free slot (slots fill in order) slower than its ``capture_speed``, a hit of the lock, until
 ``World.release_lock`` lets its balls go at its ``kick``. A released ball is not captured again by
-the same saucer or lock until it has left its capture radius. The test is on the frame's end
-state (a ball slow enough to be captured moves less than a centimetre a frame).
+the same saucer or lock until it has left its capture radius. A ball is taken only where it
+fits: while another ball (in play or held) lies within two radii of the centre or slot it would
+be put at, it stays free (and is taken in a later frame, once there is room), so that a capture
+never puts a ball onto another. The test is on the frame's end state (a ball slow enough to be
+captured moves less than a centimetre a frame).
 
 One compiled body per env (:func:`play_env_holders`), which ``World.step`` runs over every env
 (:func:`play_holders`) and the game's compiled frame loop runs env by env (``game.play``).
@@ -39,6 +42,7 @@ class Holders(NamedTuple):
     lock_reach: np.ndarray  # (K,) float64: capture radius [m]
     lock_capture: np.ndarray  # (K,) float64: capture speed [m/s]
     lock_kick: np.ndarray  # (K, 2) float64 [m/s]
+    ball_radius: float  # [m]: a ball is taken only where no other lies within twice it
 
 
 def holder_arrays(table: Table, saucer_ids: np.ndarray, lock_ids: np.ndarray) -> Holders:
@@ -62,6 +66,7 @@ def holder_arrays(table: Table, saucer_ids: np.ndarray, lock_ids: np.ndarray) ->
         lock_reach=np.array([lock.capture_radius(r) for lock in locks], dtype=np.float64),
         lock_capture=np.array([lock.capture_speed for lock in locks], dtype=np.float64),
         lock_kick=np.array([lock.kick for lock in locks], dtype=np.float64).reshape(-1, 2),
+        ball_radius=float(r),
     )
 
 
@@ -77,6 +82,18 @@ def place_slot(balls, active, held, holder, slot, held_time, released_from, env,
     held_time[env, ball] = 0.0
     held[env, ball] = False
     released_from[env, ball] = -1
+
+
+@njit(cache=True, inline="always")
+def _fits(balls, active, env, ball, x, y, radius):
+    """Whether env ``env``'s ball ``ball`` fits at (x, y): no other ball on the table (in play or
+    held) within two radii of it."""
+    for other in range(active.shape[1]):
+        if other != ball and active[env, other]:
+            gap = math.hypot(balls[env, other, BALL_X] - x, balls[env, other, BALL_Y] - y)
+            if gap < 2.0 * radius:
+                return False
+    return True
 
 
 @njit(cache=True)
@@ -173,7 +190,7 @@ def _play_saucers(balls, active, held, holder, slot, held_time, released_from, s
             busy = False  # one ball at a time
             for ball in range(n_balls):
                 busy |= holder[env, ball] == element
-            if not busy:
+            if not busy and _fits(balls, active, env, catch, cx, cy, h.ball_radius):
                 _capture(balls, active, held, holder, slot, held_time, released_from, state,
                          env, catch, element, cx, cy, 0, dt)  # fmt: skip
                 free[catch] = False
@@ -213,8 +230,10 @@ def _play_locks(balls, active, held, holder, slot, held_time, released_from, sta
                     break
             if into < 0 or gaps[ball, into] > reach:
                 continue
+            x, y = h.lock_slots[k, into, 0], h.lock_slots[k, into, 1]
+            if not _fits(balls, active, env, ball, x, y, h.ball_radius):
+                continue
             _capture(balls, active, held, holder, slot, held_time, released_from, state, env,
-                     ball, element, h.lock_slots[k, into, 0], h.lock_slots[k, into, 1], into,
-                     dt)  # fmt: skip
+                     ball, element, x, y, into, dt)  # fmt: skip
             taken[into] = True
             free[ball] = False

@@ -218,6 +218,60 @@ def test_several_balls_on_the_multiball_table_never_overlap_or_escape():
             assert ((live >= 0.0) & (live <= [table.width, table.height])).all()
 
 
+def overlap(world, env, table):
+    """The deepest overlap of two balls on env ``env``'s table (in play or held) [m]."""
+    live = world.balls[env, world.active[env]][:, :2]
+    gaps = [math.dist(a, b) for i, a in enumerate(live) for b in live[i + 1 :]]
+    return max((2 * table.ball.radius - gap for gap in gaps), default=-math.inf)
+
+
+def test_a_capture_never_puts_a_ball_onto_another():
+    # Found: a ball at rest by the saucer captured onto its centre, where another ball lay.
+    table = load_table("classic_v3")
+    world = World(table, 1)
+    world.place_ball(0, (0.041, 0.70), ball=0)
+    world.place_ball(0, (0.0725, 0.70), ball=1)
+    for _ in range(3):
+        world.step()
+        assert overlap(world, 0, table) <= table.simulation.skin
+    assert not world.held[0].any()  # no room at the centre: not taken
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_balls_placed_around_each_capture_point_are_taken_only_where_they_fit(seed):
+    # Two or three slow balls dropped around a saucer's centre or a lock's slot, another
+    # sometimes held there: whatever is taken, no two balls ever overlap past the skin.
+    table = load_table("classic_v3")
+    points = [s.center for s in table.saucers] + [slot for lock in table.locks
+                                                  for slot in lock.slots]  # fmt: skip
+    rng = np.random.default_rng(seed)
+    r, skin = table.ball.radius, table.simulation.skin
+    world = World(table, len(points) * 8)
+    taken = 0
+    for env in range(world.n_envs):
+        x, y = points[env % len(points)]
+        placed = []
+        for ball in range(int(rng.integers(2, 4))):
+            for _ in range(100):  # apart from the others, within a few radii of the point
+                angle, reach = rng.uniform(0, 2 * math.pi), rng.uniform(0.0, 3.0 * r)
+                spot = (x + reach * math.cos(angle), y + reach * math.sin(angle))
+                if all(math.dist(spot, other) > 2 * r + skin for other in placed):
+                    break
+            else:
+                continue
+            try:
+                world.place_ball(env, spot, tuple(rng.uniform(-0.2, 0.2, 2)), ball=ball)
+            except ValueError:  # (inside a wall: not a state the loader accepts)
+                continue
+            placed.append(spot)
+    for _ in range(90):
+        world.step()
+        taken += int(world.held.sum())
+        for env in range(world.n_envs):
+            assert overlap(world, env, table) <= skin, env
+    assert taken > 0  # captures happened
+
+
 pymunk = pytest.importorskip("pymunk")
 
 
