@@ -25,15 +25,19 @@ from agents.runs import (
     extend_run,
     stopped_before_learning,
 )
+from pinball_env.tools import command_parser
 
 # train(config, run, resume, progress_bar, args) -> the final model's path
 Train = Callable[[AnyConfig, Path, bool, bool, argparse.Namespace], Path]
 
 
-def training_parser(description: str, configs: str, overrides: str) -> argparse.ArgumentParser:
-    """The options of every training: ``--config`` (one of ``configs``), the ``key=value``
-    overrides, ``--resume``, ``--runs``, ``--report``, ``--episodes``, ``--no-progress``."""
-    parser = argparse.ArgumentParser(description=description)
+def training_parser(
+    module: str, doc: str | None, configs: str, overrides: str
+) -> argparse.ArgumentParser:
+    """The options of every training (``python -m MODULE``, described by the first line of
+    ``doc``): ``--config`` (one of ``configs``), the ``key=value`` overrides, ``--resume``,
+    ``--runs``, ``--report``, ``--episodes``, ``--no-progress``."""
+    parser = command_parser(module, doc)
     parser.add_argument("--config", type=Path, help=f"a YAML config ({configs})")
     parser.add_argument("overrides", nargs="*", help=overrides)
     parser.add_argument("--resume", type=Path, metavar="RUN", help="a run folder to go on with")

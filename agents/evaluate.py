@@ -70,12 +70,19 @@ from agents.rollouts import rollouts as rollouts
 from agents.watch import record_video
 from agents.watch import watch_games as watch_games
 from pinball_env.protocol import EVAL_SEEDS
+from pinball_env.tools import command_parser
+from pinball_env.tools.demo import has_display
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = command_parser("agents.evaluate", __doc__)
     who = parser.add_mutually_exclusive_group(required=True)
-    who.add_argument("--model", type=Path, help="a run folder or model zip (or RLlib checkpoint)")
+    who.add_argument(
+        "--model",
+        type=Path,
+        help="a run folder, a model or checkpoint zip, "
+        "pretrained:NAME (an agent that ships), or an RLlib run or checkpoint folder",
+    )
     who.add_argument("--policy", choices=BASELINES, help="a baseline")
     who.add_argument("--recording", type=Path, help="score a play-tool recording (a human's)")
     parser.add_argument("--protocol", action="store_true", help="the benchmark protocol's games")
@@ -88,6 +95,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--curve", action="store_true", help="draw a run's learning curve")
     parser.add_argument("--watch", action="store_true", help="show the games in a window")
     args = parser.parse_args(argv)
+    if args.watch and not has_display():
+        parser.exit(2, "error: --watch shows the games in a window, and no display was found: "
+                       "watch in the browser instead (python -m pinball_env.tools.serve --model "
+                       "MODEL, docs/browser.md)\n")  # fmt: skip
     if args.recording is not None:
         given = [flag for flag, value in (("--protocol", args.protocol), ("--env", args.env),
                  ("--table", args.table), ("--seed", args.seed), ("--video", args.video),

@@ -24,7 +24,6 @@ score (null in the JSON). Written to ``--out`` (default
 run folder per N.
 """
 
-import argparse
 import csv
 import json
 import time
@@ -38,6 +37,7 @@ from agents.policy import load_policy
 from agents.rollouts import BASELINES, baseline_player, play_games, trained_player
 from agents.runs import MODEL_FILE
 from agents.train import set_threads, start, train
+from pinball_env.tools import command_parser
 
 PROCGEN_ID = "PinballProcgen-v0"
 LAYOUT_COUNTS = (1, 16, 256, 0)
@@ -203,7 +203,7 @@ def plot(results: list[dict], path: Path, steps: int) -> None:
 
 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = command_parser("agents.generalization", __doc__)
     parser.add_argument("--config", type=Path, required=True, help="a PinballProcgen-v0 config")
     parser.add_argument("overrides", nargs="*", help="key=value settings over the config")
     parser.add_argument("--layouts", type=int, nargs="+", default=list(LAYOUT_COUNTS),

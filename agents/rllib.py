@@ -405,7 +405,7 @@ def prepare(config: RllibConfig, args: argparse.Namespace) -> list[dict] | None:
 
 def main(argv: list[str] | None = None) -> Path | list[dict]:
     parser = training_parser(
-        __doc__.split("\n")[0], "configs/agents/rllib_*.yaml", "key=value settings over the config"
+        "agents.rllib", __doc__, "configs/agents/rllib_*.yaml", "key=value settings over the config"
     )
     parser.add_argument("--address", help="a Ray cluster to join (auto, or HOST:PORT)")
     parser.add_argument("--scaling", type=int, nargs="+", metavar="RUNNERS",

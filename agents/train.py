@@ -232,7 +232,7 @@ def keep_best(run: Path, best: dict[str, Any]) -> None:
 
 def main(argv: list[str] | None = None) -> Path:
     parser = training_parser(
-        __doc__.split("\n")[0], "configs/agents/*.yaml",
+        "agents.train", __doc__, "configs/agents/*.yaml",
         "key=value settings over the config (--resume: extensions)",
     )  # fmt: skip
     return run_training(

@@ -45,6 +45,9 @@ Measures, with uniformly random actions on the classic table (state observations
   ``reset``, ``VecNormalize`` included: the env as SB3 sees it) and ``PREFIX_learner_share``
   (the rest: the policy's forward passes in the rollouts, the buffer and its advantages,
   ``train()``'s epochs, SB3's bookkeeping);
+- training that shares the machine: ``ppo_scale_v2.yaml``'s again while another CPU-bound
+  process (a Python busy loop) runs beside it (``sb3_ppo_scale_v2_shared_env_steps_per_second``),
+  and ``ratio_sb3_ppo_scale_v2_shared_to_alone`` (at least 0.5 is a fair share of 2 cores);
 - start-up: import + make + first step with a warm numba cache, and with a cold one (compiling
   every kernel; skipped with ``--quick``), each in a fresh process;
 
@@ -266,6 +269,20 @@ def measure_tablegen(count: int, seed: int) -> Figures:
     return result
 
 
+def measure_shared(prefix: str, iterations: int) -> Figures:
+    """:func:`measure_sb3` of ``prefix`` while another CPU-bound process runs beside it (a
+    Python busy loop: a user's other job), as ``PREFIX_shared_env_steps_per_second``; the
+    training alone is ``PREFIX_env_steps_per_second`` (``ratio_..._shared_to_alone``)."""
+    competitor = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        figures = measure_sb3(prefix, iterations)
+    finally:
+        competitor.kill()
+        competitor.wait()
+    rate = figures[f"{prefix}_env_steps_per_second"]
+    return {f"{prefix}_shared_env_steps_per_second": rate}
+
+
 def sb3_model(config_path: Path) -> tuple[Any, Any]:
     """The stable-baselines3 model of the config at ``config_path`` and its VecEnv, set up as
     ``agents.train`` does it (``load_config``, ``set_threads``: torch's threads are the
@@ -484,6 +501,7 @@ def groups(quick: bool, seed: int) -> list[tuple[str, Callable[[], Figures]]]:
     found += [
         ("tablegen", lambda: measure_tablegen(8 if quick else 32, seed)),
         *[(prefix, lambda p=prefix: measure_sb3(p, 2 if quick else 8)) for prefix in SB3_CONFIGS],
+        ("sb3_ppo_scale_v2_shared", lambda: measure_shared("sb3_ppo_scale_v2", 2 if quick else 8)),
         ("startup_warm", lambda: {"startup_warm_seconds": startup_seconds(cold=False)}),
     ]
     if not quick:
@@ -515,6 +533,10 @@ def finish(figures: Figures, quick: bool) -> dict:
         result[f"ratio_{numerator}_to_{denominator}"] = divide(
             rate.get(numerator), rate.get(denominator)
         )
+    result["ratio_sb3_ppo_scale_v2_shared_to_alone"] = divide(
+        figures.get("sb3_ppo_scale_v2_shared_env_steps_per_second"),
+        figures.get("sb3_ppo_scale_v2_env_steps_per_second"),
+    )
     result["ratio_kernel_3balls_to_1ball"] = divide(
         figures.get(MULTIBALL_FIGURES[3]), figures.get(MULTIBALL_FIGURES[1])
     )

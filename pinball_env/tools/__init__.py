@@ -10,3 +10,17 @@
 
 The speed benchmark is a developer's tool of the checkout: ``python -m benchmarks.speed``.
 """
+
+import argparse
+import re
+from typing import Any
+
+
+def command_parser(module: str, doc: str | None, **kwargs: Any) -> argparse.ArgumentParser:
+    """The argument parser of ``python -m MODULE``: its usage names that command, and its
+    description is the first line of the module's docstring in plain text (the docstring's
+    reStructuredText double backquotes dropped)."""
+    first = (doc or "").strip().splitlines()[0] if (doc or "").strip() else ""
+    return argparse.ArgumentParser(
+        prog=f"python -m {module}", description=re.sub(r"``([^`]*)``", r"\1", first), **kwargs
+    )

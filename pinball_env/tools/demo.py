@@ -6,7 +6,6 @@ Opens a pygame window (the ``render`` extra) and plays games of ``Pinball-v0`` w
 ``plot`` extra). What it needs is checked before a game is played.
 """
 
-import argparse
 import os
 import sys
 from pathlib import Path
@@ -19,6 +18,7 @@ from pinball_env import MAX_EPISODE_STEPS  # importing the package registers Pin
 from pinball_env.envs import unwrapped_pinball
 from pinball_env.extras import MissingDependency, require
 from pinball_env.players import HeuristicPolicy
+from pinball_env.tools import command_parser
 
 
 def has_display() -> bool:
@@ -73,7 +73,7 @@ def play(
 
 
 def main(argv: list[str] | None = None) -> list[int]:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = command_parser("pinball_env.tools.demo", __doc__)
     parser.add_argument("--table", default="classic", help="table name or YAML path")
     parser.add_argument("--episodes", type=int, default=1, help="games to play")
     parser.add_argument("--seed", type=int, default=0, help="seed of the first game")

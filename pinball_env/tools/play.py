@@ -66,6 +66,7 @@ from pinball_env.recording import (
 )
 from pinball_env.recording import replay as replay_recording
 from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Window
+from pinball_env.tools import command_parser
 from pinball_env.tools.demo import has_display
 
 ENV_ID = RECORDABLE_ENV_IDS[0]  # the env played by default
@@ -384,7 +385,7 @@ class PlayLoop:
 
 def parser() -> argparse.ArgumentParser:
     """The command line's arguments."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = command_parser("pinball_env.tools.play", __doc__)
     parser.add_argument(
         "--env",
         choices=RECORDABLE_ENV_IDS,

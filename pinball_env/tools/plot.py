@@ -27,6 +27,7 @@ from pinball_env.physics.columns import BOB_X, BOB_Y
 from pinball_env.procgen import DIFFICULTIES, generate_table, load_any_table
 from pinball_env.sim.world import World
 from pinball_env.table import Flipper, Table
+from pinball_env.tools import command_parser
 
 WALL_COLOUR = "#1d3557"
 ONE_SIDED_COLOUR = "#e76f51"
@@ -457,7 +458,7 @@ def plot_tilt(tables: list[Table], out: Path) -> Path:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = command_parser("pinball_env.tools.plot", __doc__)
     parser.add_argument("table", nargs="?", default="box", help="table name or YAML path")
     parser.add_argument("--out", type=Path, default=Path("outputs/table.png"))
     parser.add_argument(

@@ -55,6 +55,7 @@ from pinball_env.recording import (
     load_recording,
     make_recorded_env,
 )
+from pinball_env.tools import command_parser
 from pinball_env.tools.web.sessions import (
     Message,
     PlaySession,
@@ -252,7 +253,7 @@ async def play_session(
 
 def parser() -> argparse.ArgumentParser:
     """The command line's arguments."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = command_parser("pinball_env.tools.serve", __doc__)
     parser.add_argument("--host", default=HOST, help=f"address to listen on (default {HOST})")
     parser.add_argument("--port", type=int, default=PORT, help=f"port (default {PORT})")
     parser.add_argument(

@@ -8,7 +8,6 @@ held-out games (``--games``; sticky actions), as a table and as JSON (``--json``
     python -m pinball_env.tools.tilt --envs Pinball-v1 Pinball-v2 --games 100 --json tilt.json
 """
 
-import argparse
 import json
 from pathlib import Path
 from typing import Any
@@ -19,6 +18,7 @@ from pinball_env.envs import unwrapped_pinball
 from pinball_env.game.actions import action_meanings
 from pinball_env.players import HeuristicPolicy
 from pinball_env.protocol import EVAL_SEEDS, GAME_OPTIONS, REPEAT_ACTION_PROBABILITY
+from pinball_env.tools import command_parser
 
 MEANINGS = action_meanings(cabinet=True)
 PLUNGER = MEANINGS.index("PLUNGER")
@@ -86,7 +86,7 @@ def heuristic_games(env_id: str, games: int) -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = command_parser("pinball_env.tools.tilt", __doc__)
     parser.add_argument("--envs", nargs="+", default=["Pinball-v1", "Pinball-v2"])
     parser.add_argument("--seconds", type=float, default=20.0, help="each pattern's length")
     parser.add_argument("--games", type=int, default=0, help="heuristic games (default: none)")

@@ -117,3 +117,25 @@ def test_watching_shows_every_frame_of_the_evaluated_games(tmp_path, monkeypatch
     pygame.event.post(pygame.event.Event(pygame.QUIT))
     stopped = evaluate.watch_games(trained.config, trained.normalization, player, 100_000, 2)
     assert stopped["episodes"] == 0
+
+
+def test_watch_without_a_display_stops_at_once_and_points_to_the_browser(monkeypatch, capsys):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    with pytest.raises(SystemExit) as stopped:
+        evaluate.main(["--policy", "heuristic", "--watch", "--episodes", "1"])
+    assert stopped.value.code == 2
+    error = capsys.readouterr().err
+    assert "no display was found" in error and "pinball_env.tools.serve" in error
+
+
+@pytest.mark.parametrize(
+    "module",
+    ["agents.evaluate", "agents.train", "pinball_env.tools.play", "pinball_env.tools.serve"],
+)
+def test_help_names_the_command_and_reads_as_plain_text(module, capsys):
+    import importlib
+
+    with pytest.raises(SystemExit):
+        importlib.import_module(module).main(["--help"])
+    text = capsys.readouterr().out
+    assert text.startswith(f"usage: python -m {module}") and "``" not in text
