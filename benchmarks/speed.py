@@ -66,6 +66,7 @@ imports nothing of ``benchmarks/`` but for ``--compare``, and only what every re
 """
 
 import argparse
+import importlib
 import inspect
 import json
 import math
@@ -320,6 +321,8 @@ def measure_sb3(prefix: str, iterations: int) -> Figures:
     root = Path(pinball_env.__file__).resolve().parent.parent  # the tree: configs/, agents/
     if not (root / SB3_CONFIGS[prefix]).is_file():
         return dict.fromkeys(names)
+    # agents first, as agents.train imports it: it sets how torch's threads wait.
+    importlib.import_module("agents")
     try:
         import stable_baselines3  # noqa: F401
         import torch  # noqa: F401

@@ -177,3 +177,19 @@ def test_a_resume_refuses_keys_that_would_change_what_was_learned(tmp_path, caps
         train.main(["--resume", str(run), "max_minutes=-1", "--no-progress"])
     assert "max_minutes" in capsys.readouterr().err
     assert (run / "config.yaml").read_text() == before
+
+
+@pytest.mark.parametrize(("given", "expected"), [(None, "PASSIVE"), ("ACTIVE", "ACTIVE")])
+def test_the_agents_make_torchs_threads_wait_passively_unless_told(given, expected):
+    # (a training sharing the machine kept a third of its speed with spinning OpenMP threads)
+    import os
+    import subprocess
+    import sys
+
+    env = {key: value for key, value in os.environ.items() if key != "OMP_WAIT_POLICY"}
+    if given is not None:
+        env["OMP_WAIT_POLICY"] = given
+    code = "import agents.train, os, torch; print(os.environ['OMP_WAIT_POLICY'])"
+    result = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, check=True,
+                            capture_output=True, text=True)  # fmt: skip
+    assert result.stdout.strip() == expected
