@@ -11,11 +11,12 @@ import json
 from pathlib import Path
 from typing import Any
 
-from agents.config import load_run_config
+from agents.config import AnyConfig, load_run_config
 from agents.evaluation import evaluate, player_for
 from agents.rollouts import BASELINES, Player
 from agents.runs import best_validation, progress_rows, validation_rows
 from agents.watch import record_video
+from pinball_env.versions import ENV_VERSIONS
 
 REPORT_FILE = "report.json"
 
@@ -40,6 +41,15 @@ def baselines_for(run: Path) -> dict[str, float]:
         return {}
     data = json.loads(report.read_text())
     return {name: data[name]["score_mean"] for name in BASELINES if name in data}
+
+
+def played_table(config: AnyConfig) -> str:
+    """The table a config's env plays: its ``table`` option, else its env version's own."""
+    table = config.env.kwargs.get("table")
+    if table is None:
+        version = ENV_VERSIONS.get(config.env.id)
+        return version.table if version is not None else "its table"
+    return str(table)
 
 
 def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> None:
@@ -72,7 +82,7 @@ def plot_learning_curve(run: Path, out: Path, baselines: dict[str, float]) -> No
         ax.axhline(score, linestyle=style, color="grey", label=f"{name} (evaluation)")
     ax.set_xlabel("frames played (1/60 s each)")
     ax.set_ylabel("game score")
-    ax.set_title(f"{config.env.id} on {config.env.kwargs.get('table', 'classic')}")
+    ax.set_title(f"{config.env.id} on {played_table(config)}")
     ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()

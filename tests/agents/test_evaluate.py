@@ -139,3 +139,13 @@ def test_help_names_the_command_and_reads_as_plain_text(module, capsys):
         importlib.import_module(module).main(["--help"])
     text = capsys.readouterr().out
     assert text.startswith(f"usage: python -m {module}") and "``" not in text
+
+
+def test_the_learning_curve_names_the_table_the_env_plays():
+    from agents.config import config_from_dict
+    from agents.report import played_table
+
+    assert played_table(config_from_dict({"env": {"id": "Pinball-v2"}})) == "classic_v2"
+    assert played_table(config_from_dict({"env": {"id": "Pinball-v3"}})) == "classic_v3"
+    chosen = {"env": {"id": "Pinball-v0", "kwargs": {"table": "classic_v1"}}}
+    assert played_table(config_from_dict(chosen)) == "classic_v1"
