@@ -129,7 +129,8 @@ class Progress(BaseCallback):
 
     def _on_training_start(self) -> None:  # (after the budget's: its deadline is set)
         self.counter = FrameCounter(self.training_env, self.budget.frames)
-        self.bar = ProgressBar(self.config, self.num_timesteps, self.budget.deadline, self.show)
+        self.bar = ProgressBar(self.config, self.num_timesteps, self.budget.deadline, self.show,
+                               self.counter.frames)  # fmt: skip
 
     def _on_training_end(self) -> None:
         self.bar.close()
@@ -139,7 +140,7 @@ class Progress(BaseCallback):
         for env in np.flatnonzero(dones):
             self.scores.append(infos[env]["score"])
             self.truncated.append(infos[env].get("TimeLimit.truncated", False))
-        self.bar.update(self.num_timesteps)
+        self.bar.update(self.num_timesteps, frames=self.counter.frames)
         return True
 
     def _on_rollout_end(self) -> None:

@@ -87,12 +87,17 @@ class StopRequest:
 
 
 class ProgressBar:
-    """A tqdm bar of the env steps to ``total_timesteps`` whose remaining time honours
-    ``max_minutes``: while the deadline would come first, the bar's end is the step it will
-    reach by then at the session's rate so far (shown as ``stops at max_minutes``)."""
+    """A tqdm bar of the env steps to the step the training will stop at: ``total_timesteps``,
+    or sooner where the frame budget (``total_frames``) or ``max_minutes`` comes first, that
+    step estimated from the session's rate so far (frames a step, steps a second; shown as
+    ``stops at total_frames`` or ``stops at max_minutes``), so that the bar ends at 100%."""
 
-    def __init__(self, config: AnyConfig, steps: int, deadline: float, show: bool) -> None:
+    def __init__(
+        self, config: AnyConfig, steps: int, deadline: float, show: bool, frames: int = 0
+    ) -> None:
         self.total, self.first, self.deadline = config.total_timesteps, steps, deadline
+        self.first_frames = frames
+        self.frame_budget = int(getattr(config, "total_frames", 0) or 0)
         self.limited = bool(config.max_minutes)
         self.began = time.monotonic()
         self.shown = 0.0
@@ -102,19 +107,29 @@ class ProgressBar:
 
             self.bar = tqdm(total=self.total, initial=steps, unit="step", dynamic_ncols=True)
 
-    def update(self, steps: int, force: bool = False) -> None:
-        """Show ``steps`` done (at most twice a second, unless ``force``)."""
+    def update(self, steps: int, force: bool = False, frames: int | None = None) -> None:
+        """Show ``steps`` done (``frames`` played by then; at most twice a second, unless
+        ``force``)."""
         now = time.monotonic()
         if self.bar is None or (now - self.shown < 0.5 and not force):
             return
         self.shown = now
+        end, why = self.total, ""
+        if steps > self.first and frames is not None and self.frame_budget:
+            per_step = (frames - self.first_frames) / (steps - self.first)
+            if per_step > 0:
+                by_frames = steps + max(0.0, self.frame_budget - frames) / per_step
+                if by_frames < end:
+                    end, why = int(by_frames), "stops at total_frames"
         if self.limited and steps > self.first and now > self.began:
             rate = (steps - self.first) / (now - self.began)
             reachable = steps + rate * max(0.0, self.deadline - now)
-            end = int(min(self.total, max(steps, reachable)))
-            if end != self.bar.total:
-                self.bar.total = end
-                self.bar.set_description("stops at max_minutes" if end < self.total else "")
+            if reachable < end:
+                end, why = int(reachable), "stops at max_minutes"
+        end = max(steps, end)
+        if end != self.bar.total:
+            self.bar.total = end
+            self.bar.set_description(why)
         self.bar.update(steps - self.bar.n)
 
     def score(self, score: float) -> None:
@@ -124,6 +139,17 @@ class ProgressBar:
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
+
+
+def say(text: str) -> None:
+    """Print a line of a training's news (a validation, the model kept) without breaking its
+    progress bar: through tqdm, which prints it above the bar."""
+    try:
+        from tqdm import tqdm
+    except ImportError:  # (no bar without tqdm either)
+        print(text)
+        return
+    tqdm.write(text)
 
 
 class TrainingInterrupted(Exception):

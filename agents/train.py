@@ -48,6 +48,7 @@ from agents.runs import (
     latest_checkpoint,
     read_meta,
     save_model,
+    say,
     start_run,
     stats_for,
     stopped_before_learning,
@@ -208,7 +209,7 @@ def warm_start(model: Any, venv: Any, config: TrainConfig, stop: StopRequest) ->
     ``imitation/``; returns the frames they played."""
     fit = imitate(model, venv, config.imitation_steps, config.imitation_epochs, config.seed, stop,
                   config.imitation_learning_rate)  # fmt: skip
-    print(
+    say(
         f"warm start: the heuristic played {fit['steps']} steps ({fit['frames']} frames); "
         f"the policy now takes its action {fit['accuracy']:.1%} of the time "
         f"({fit['seconds']:.0f} s){' (cut short)' if stop else ''}"
@@ -224,7 +225,7 @@ def keep_best(run: Path, best: dict[str, Any]) -> None:
         if (run / name).exists():
             target = run / name.replace(BEST_MODEL, MODEL_NAME)
             atomic_write(target, lambda file, source=run / name: file.write(source.read_bytes()))
-    print(
+    say(
         f"model: the best on the validation games, at {int(best['steps'])} steps "
         f"(score {best['score_mean']:.0f}); the last is in {CHECKPOINTS}/"
     )

@@ -17,6 +17,7 @@ from agents.runs import (
     atomic_write,
     best_validation,
     save_model,
+    say,
     validation_rows,
 )
 from pinball_env import protocol
@@ -72,7 +73,7 @@ class Validation:
         writer.writeheader()
         writer.writerows(self.rows)
         atomic_write(self.run / VALIDATION_FILE, lambda file: file.write(table.getvalue().encode()))
-        print(
+        say(
             f"validation at {row['steps']} steps: score {row['score_mean']:.0f} (95% CI "
             f"{row['score_low']:.0f}-{row['score_high']:.0f}) over {len(games)} games; best "
             f"{self.best['score_mean']:.0f}"

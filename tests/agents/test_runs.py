@@ -60,3 +60,25 @@ def test_the_progress_bar_counts_down_to_max_minutes(monkeypatch):
     assert unlimited.bar.total == config.total_timesteps
     bar.close()
     unlimited.close()
+
+
+def test_the_training_bar_ends_where_the_frame_budget_stops_it():
+    # 1000 steps asked, a budget of 600 frames: at 100 steps and 200 frames (2 a step), the
+    # bar's end is the 300th step, so it ends at 100% where the budget stops the training.
+    from agents.runs import ProgressBar
+
+    config = load_config(ROOT / "configs/agents/ppo.yaml",
+                         ["total_timesteps=1000", "total_frames=600"])  # fmt: skip
+    bar = ProgressBar(config, 0, deadline=float("inf"), show=True, frames=0)
+    bar.update(100, force=True, frames=200)
+    assert bar.bar.total == 300 and bar.bar.desc.startswith("stops at total_frames")
+    bar.update(300, force=True, frames=600)
+    assert bar.bar.n == bar.bar.total == 300
+    bar.close()
+
+
+def test_news_of_a_training_is_written_above_its_bar(capsys):
+    from agents.runs import say
+
+    say("validation at 10 steps")
+    assert capsys.readouterr().out == "validation at 10 steps\n"
