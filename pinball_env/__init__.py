@@ -27,9 +27,8 @@ from gymnasium.envs.registration import register
 # is taken: the generator registers them with the table package when imported.
 import pinball_env.procgen  # noqa: F401
 from pinball_env.options import MAX_EPISODE_STEPS, PinballOptions
+from pinball_env.version import __version__ as __version__
 from pinball_env.versions import ENV_VERSIONS
-
-__version__ = "0.1.0"
 
 # Every version has the same entry points (the classes' one home, pinball_env.envs) and the
 # game's two minutes as its time limit. The default table is left to the options' default, as

@@ -49,6 +49,7 @@ BELOW_TOOLS = {
     "physics": (),
     "checks.py": ("table",),  # the kinds of value are the table's (table/fields.py)
     "extras.py": (),
+    "version.py": (),  # the package's version
     "protocol.py": ("options", "versions"),  # its game is options' GAME_FRAMES
     "table": ("physics",),
     "sim": ("physics", "table", "extras"),
@@ -59,8 +60,8 @@ BELOW_TOOLS = {
     "game": ("physics", "table", "sim", "options", "checks"),
     "observation.py": ("physics", "table", "sim", "game", "render"),
     "envs": ("physics", "table", "sim", "procgen", "game", "options", "checks", "observation",
-             "render"),
-    "__init__.py": ("options", "procgen", "versions"),
+             "render", "version"),  # (a saved game carries the package's version)
+    "__init__.py": ("options", "procgen", "versions", "version"),
     "wrappers": ("envs", "extras"),
     "players": ("physics", "table", "sim", "game"),
     "heuristic.py": ("players",),  # the documented import path of the heuristic

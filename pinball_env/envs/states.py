@@ -27,10 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from pinball_env import __version__
 from pinball_env.envs.core import PinballCore
 from pinball_env.game.state import GameState
 from pinball_env.table import Table, table_sha256
+from pinball_env.version import __version__
 
 
 @dataclasses.dataclass(frozen=True)

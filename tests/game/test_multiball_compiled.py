@@ -95,6 +95,13 @@ def reference_play_holders(world, stepped):
         world.state.contact_count[env] = count + 1
         free[env, ball] = False
 
+    def fits(env, ball, position):  # no other ball on the table within two radii of the place
+        others = world.active[env].copy()
+        others[ball] = False
+        return not (
+            np.hypot(*(states[env, others][:, [BALL_X, BALL_Y]] - position).T) < 2 * r
+        ).any()
+
     for s, saucer in enumerate(table.saucers):
         element = int(world.saucer_ids[s])
         mine = (world.holder == element) & stepped[:, None]
@@ -107,8 +114,9 @@ def reference_play_holders(world, stepped):
         world.released_from[(world.released_from == element) & ~near] = -1
         catch = free & near & (speed < saucer.capture_speed) & (world.released_from != element)
         for env in np.flatnonzero(catch.any(axis=1)):
-            if not (world.holder[env] == element).any():
-                capture(int(env), int(np.flatnonzero(catch[env])[0]), element, saucer.center, 0)
+            first = int(np.flatnonzero(catch[env])[0])
+            if not (world.holder[env] == element).any() and fits(env, first, saucer.center):
+                capture(int(env), first, element, saucer.center, 0)
     for k, lock in enumerate(table.locks):
         element, reach = int(world.lock_ids[k]), lock.capture_radius(r)
         slots = np.asarray(lock.slots)
@@ -119,7 +127,9 @@ def reference_play_holders(world, stepped):
             taken = set(world.slot[env, world.holder[env] == element].tolist())
             for ball in np.flatnonzero(catch[env]):
                 slot = next((j for j in range(len(slots)) if j not in taken), -1)
-                if slot >= 0 and gaps[env, ball, slot] <= reach:
+                if slot < 0 or gaps[env, ball, slot] > reach:
+                    continue
+                if fits(env, ball, lock.slots[slot]):
                     capture(int(env), int(ball), element, lock.slots[slot], slot)
                     taken.add(slot)
 

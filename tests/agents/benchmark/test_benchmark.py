@@ -76,7 +76,8 @@ def test_the_table_holds_every_run_and_the_protocols_metrics(tiny):
     for run in saved["methods"]["ppo-v0"]["runs"]:  # each validation: its frames, mean, IQM
         rows = validation_rows(out / run["run"])
         assert run["validations"] == [[r["frames"], r["score_mean"], r["score_iqm"]] for r in rows]
-        assert rows and run["validation"] == max(r["score_mean"] for r in rows)
+        # (the tiny runs skip validation: none recorded, none claimed)
+        assert run["validation"] == (max(r["score_mean"] for r in rows) if rows else None)
 
 
 def test_a_learning_curve_is_the_mean_normalised_iqm_over_the_runs_at_each_validation():
