@@ -20,6 +20,7 @@ from agents.config import (
 from agents.report import report
 from agents.runs import (
     CONFIG_FILE,
+    CommandInterrupted,
     TrainingInterrupted,
     checkpoints_of,
     extend_run,
@@ -101,7 +102,8 @@ def run_training(
     except ConfigError as error:
         parser.exit(2, f"error: {error}\n")
     except TrainingInterrupted as stopped:
-        parser.exit(stopped.exit_code, f"{stopped}\n")
+        print(stopped, file=sys.stderr)
+        raise CommandInterrupted(stopped.exit_code) from None
     print(f"model: {model}")
     if args.report:
         report(run, episodes=args.episodes)

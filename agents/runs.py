@@ -175,6 +175,13 @@ class TrainingInterrupted(Exception):
         )
 
 
+class CommandInterrupted(SystemExit, KeyboardInterrupt):
+    """The exit of a training command that a signal stopped, once its checkpoint is saved: a
+    ``SystemExit`` for the shell (status 128 + the signal, no traceback) and a
+    ``KeyboardInterrupt`` for whatever runs the command in its own process, so that Ctrl-C
+    stops a pytest session (or a notebook cell) as it always does, not only the training."""
+
+
 def run_name(config: AnyConfig, when: str) -> str:
     """A run folder's name: env, algorithm (``rllib-ppo`` for RLlib), seed and start time."""
     env = config.env.id.replace("/", "-")

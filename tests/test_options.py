@@ -68,6 +68,7 @@ def test_rays_work_on_a_fixed_table_too():
 
 
 def test_a_config_checks_its_env_options_without_building_an_env(monkeypatch):
+    pytest.importorskip("torch", reason="the agents' extra (a config checks its torch device)")
     from agents.config import ConfigError, config_from_dict
     from pinball_env.envs import core
 
@@ -90,13 +91,12 @@ def test_the_documented_imports_still_work():
     from pinball_env.procgen import generate_table
     from pinball_env.sim import World
     from pinball_env.table import TableError, dump_table, load_table
-    from pinball_env.wrappers import SB3VecEnv
 
     # The gym.make ids build the classes of their one home.
     assert isinstance(gym.make("Pinball-v0").unwrapped, PinballEnv)
     assert gym.spec("Pinball-v0").vector_entry_point == "pinball_env.envs:PinballVectorEnv"
     assert callable(step_world) and callable(sweep_circle_segment) and callable(dump_table)
-    assert issubclass(TableError, ValueError) and SB3VecEnv.__name__ == "SB3VecEnv"
+    assert issubclass(TableError, ValueError)
     world = World(load_table("classic"), n_envs=2)
     world.place_ball(0, (0.25, 0.5))
     world.launch(1, 2.5)
@@ -107,3 +107,10 @@ def test_the_documented_imports_still_work():
     pressed = HeuristicPolicy(game.table).buttons(np.array([0.24, 0.7]), np.array([0.0, -1.0]))
     assert pressed.dtype == bool and not pressed.any()
     assert generate_table(3).name == "procgen:3"
+
+
+def test_the_documented_sb3_adapter_imports():
+    pytest.importorskip("stable_baselines3", reason="the wrappers extra")
+    from pinball_env.wrappers import SB3VecEnv
+
+    assert SB3VecEnv.__name__ == "SB3VecEnv"

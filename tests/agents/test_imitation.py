@@ -160,6 +160,8 @@ def test_a_run_stopped_in_its_warm_start_is_trained_again(tmp_path, monkeypatch,
     with pytest.raises(SystemExit) as exit_:
         tiny_run(config, tmp_path / "runs", *overrides)
     assert exit_.value.code == 128 + signal.SIGINT
+    # ... and a KeyboardInterrupt, which pytest re-raises: Ctrl-C stops a test session too.
+    assert isinstance(exit_.value, KeyboardInterrupt)
     (run,) = (tmp_path / "runs").iterdir()
     assert latest_checkpoint(run) is None and not (run / "model.zip").exists()
     assert "stopped in the warm start, before learning: nothing saved" in capsys.readouterr().err
@@ -173,3 +175,40 @@ def test_a_run_stopped_in_its_warm_start_is_trained_again(tmp_path, monkeypatch,
         for moment in ("mean", "var"):
             assert np.array_equal(getattr(getattr(trained, rms), moment),
                                   getattr(getattr(again, rms), moment))  # fmt: skip
+
+
+def test_ctrl_c_in_a_tests_training_stops_the_test_session(tmp_path):
+    """A training run inside a pytest session keeps Ctrl-C only to save its checkpoint: then
+    the session stops (pytest's KeyboardInterrupt), and the tests after it do not run."""
+    import subprocess
+    import sys
+
+    inner = tmp_path / "test_inner.py"
+    inner.write_text(
+        f"""import signal
+
+from agents import train
+from tests.agents.tiny_runs import tiny_run
+
+
+def test_training(monkeypatch, tmp_path):
+    def signalled(*args, **kwargs):  # Ctrl-C, in the warm start
+        signal.raise_signal(signal.SIGINT)
+        return fitted(*args, **kwargs)
+
+    fitted = train.imitate
+    monkeypatch.setattr("agents.train.imitate", signalled)
+    tiny_run({str(ROOT / "configs/agents/ppo.yaml")!r}, tmp_path / "runs", "imitation_steps=64")
+
+
+def test_after():
+    open({str(tmp_path / "ran")!r}, "w").close()
+"""
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+         "--rootdir", str(ROOT), str(inner)],
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == pytest.ExitCode.INTERRUPTED, done.stdout + done.stderr
+    assert "CommandInterrupted: 130" in done.stdout and not (tmp_path / "ran").exists()

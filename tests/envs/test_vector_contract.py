@@ -339,16 +339,19 @@ def test_random_seeding_basics(kind):
     env.close()
 
 
-def test_seeds_before_any_seeded_reset_are_those_the_generators_come_from():
+@pytest.mark.parametrize("kind", KINDS)
+def test_seeds_before_any_seeded_reset_are_those_the_generators_come_from(kind):
     """Gymnasium's test_random_seeds_set_at_retrieval, for envs seeded at random: each env's
-    seed is the one its generator was drawn from (seeding.np_random's)."""
-    env = make("native", "Pinball-v0")
+    seed, read before its first reset, is the one its generator was drawn from
+    (seeding.np_random's)."""
+    env = make(kind, "Pinball-v0")
     seeds = env.np_random_seed
     assert len(set(seeds)) == 3 and all(isinstance(seed, int) and seed >= 0 for seed in seeds)
     for seed, rng in zip(seeds, env.np_random, strict=True):
         assert rng.bit_generator.state == seeding.np_random(seed)[0].bit_generator.state
     env.reset()  # a reset without a seed keeps them
     assert env.np_random_seed == seeds
+    env.close()
 
 
 def test_a_generator_set_per_env_is_used_and_its_seed_unknown():
