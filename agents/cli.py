@@ -27,6 +27,7 @@ from agents.runs import (
     stopped_before_learning,
 )
 from pinball_env.tools import command_parser
+from pinball_env.versions import older_version_note
 
 # train(config, run, resume, progress_bar, args) -> the final model's path
 Train = Callable[[AnyConfig, Path, bool, bool, argparse.Namespace], Path]
@@ -93,6 +94,8 @@ def run_training(
             check_evaluation_seeds(config, config.eval_seed, args.episodes)
         run = args.resume if args.resume is not None else start(config, args.runs, command)
         print(f"run folder: {run}")
+        if (note := older_version_note(config.env.id)) is not None:
+            print(note)
         try:
             model = train(config, run, args.resume is not None, not args.no_progress, args)
         except ConfigError:

@@ -69,7 +69,7 @@ from agents.rollouts import model_policy as model_policy
 from agents.rollouts import rollouts as rollouts
 from agents.watch import record_video
 from agents.watch import watch_games as watch_games
-from pinball_env.protocol import EVAL_SEEDS
+from pinball_env.protocol import EVAL_SEEDS, PROTOCOL_ENV_IDS
 from pinball_env.tools import command_parser
 from pinball_env.tools.demo import has_display
 
@@ -86,7 +86,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     who.add_argument("--policy", choices=BASELINES, help="a baseline")
     who.add_argument("--recording", type=Path, help="score a play-tool recording (a human's)")
     parser.add_argument("--protocol", action="store_true", help="the benchmark protocol's games")
-    parser.add_argument("--env", help="the baselines' env id (default: Pinball-v0)")
+    parser.add_argument(
+        "--env", help=f"the baselines' env id (default: the protocol's, {PROTOCOL_ENV_IDS[0]})"
+    )
     parser.add_argument("--table", help="the baselines' table (default: the env's)")
     parser.add_argument("--episodes", type=int, default=100, help="games to play")
     parser.add_argument("--seed", type=int, help="first game's seed (default: eval_seed)")
@@ -116,7 +118,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 def run_evaluation(args: argparse.Namespace) -> dict[str, Any]:
     """The games ``args`` ask for: watched in a window, or played and written (on the protocol
     with ``--protocol``), then the first one's video and the run's learning curve if asked."""
-    player = player_for(args.policy, args.model, args.table, args.env)
+    env = args.env or (PROTOCOL_ENV_IDS[0] if args.policy is not None else None)
+    player = player_for(args.policy, args.model, args.table, env)
     out = args.out or default_out(args.policy, args.model, args.protocol)
     if args.protocol:
         check_protocol_games(args.table, args.seed, args.episodes)

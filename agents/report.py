@@ -97,11 +97,14 @@ def report(run: Path, episodes: int = 100) -> dict[str, Any]:
     config = load_run_config(run)
     results = {}
     for name in BASELINES:
+        print(f"report: playing the {name} baseline's {episodes} games", flush=True)
         baseline = player_for(name, like=config)
         results[name] = evaluate(baseline, run / "eval" / name, episodes, config.eval_seed)
+    print(f"report: playing the model's {episodes} games", flush=True)
     model = player_for(model_path=run)
     results["model"] = evaluate(model, run / "eval" / "model", episodes)
     first = results["model"]["seeds"][0]
+    print(f"report: recording the model's game on seed {first} as {run / 'game.gif'}", flush=True)
     record_video(model.config, model.normalization, model.policy, first, run / "game.gif")
     (run / REPORT_FILE).write_text(json.dumps(results, indent=1))
     plot_learning_curve(run, run / "learning_curve.png", baselines_for(run))

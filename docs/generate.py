@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the agents package, run from the checkout
 
 from pinball_env.options import PinballOptions, VectorOptions  # noqa: E402
+from pinball_env.protocol import PROTOCOL_ENV_IDS  # noqa: E402
 from pinball_env.versions import (  # noqa: E402  (importing the package registers the envs)
     ENV_VERSIONS,
     EnvVersion,
@@ -93,9 +94,13 @@ def version_history_list(_: str = "") -> str:
 
 
 def recordable_envs(_: str = "") -> str:
-    """The envs the play tool plays and records, each with its own table, the default first."""
-    named = [f"`{v.id}` (on `{v.table}`)" for v in recordable_versions()]
-    named[0] = named[0].replace("(on", "(the default, on")
+    """The envs the play tool plays and records, each with its own table; the default (the
+    protocol's env) said."""
+    named = [
+        f"`{v.id}` (the default, on `{v.table}`)" if v.id == PROTOCOL_ENV_IDS[0]
+        else f"`{v.id}` (on `{v.table}`)"
+        for v in recordable_versions()
+    ]  # fmt: skip
     return ", ".join(named[:-1]) + f" or {named[-1]}.\n"
 
 

@@ -114,10 +114,29 @@ def version_history() -> tuple[EnvVersion, ...]:
     return tuple(sorted(ENV_VERSIONS.values(), key=lambda v: (v.name, -v.version)))
 
 
+def older_version_note(env_id: str) -> str | None:
+    """One line saying that ``env_id`` is an older version of its env and why one may still
+    use it (None for the newest, or an env not of this package), in the project's words
+    beside Gymnasium's "out of date" notice."""
+    version = ENV_VERSIONS.get(env_id)
+    if version is None:
+        return None
+    newest = max((v for v in ENV_VERSIONS.values() if v.name == version.name),
+                 key=lambda v: v.version)  # fmt: skip
+    if newest is version:
+        return None
+    why = "" if version.track is None else ", a track of the benchmark"
+    return (
+        f"note: {env_id} is an older game than {newest.id}, kept bitwise for its scores and "
+        f"agents{why} ({version.summary}); the benchmark's own env is {benchmark_versions()[0].id}"
+    )
+
+
 __all__ = [
     "ENV_VERSIONS",
     "EnvVersion",
     "benchmark_versions",
+    "older_version_note",
     "recordable_versions",
     "version_history",
 ]

@@ -72,3 +72,14 @@ def test_pinball_env_s_version_history_is_the_records():
     assert not missing, f"PinballEnv's Version History lacks (write it as the records): {missing}"
     assert positions == sorted(positions), "the history lists each env's versions newest first"
     assert len(re.findall(r"- \w+-v\d+:", history)) == len(entries)
+
+
+def test_an_older_version_says_what_it_is_and_which_env_is_the_benchmarks():
+    from pinball_env.versions import older_version_note
+
+    note = older_version_note("Pinball-v2")
+    assert note is not None and note.startswith("note: Pinball-v2 is an older game than Pinball-v3")
+    assert ENV_VERSIONS["Pinball-v2"].summary in note and note.endswith("env is Pinball-v3")
+    assert older_version_note("Pinball-v3") is None  # the newest
+    assert older_version_note("PinballProcgen-v0") is None  # its only version
+    assert older_version_note("CartPole-v1") is None

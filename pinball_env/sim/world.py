@@ -20,7 +20,10 @@ backend; every env in one compiled pass): ``sim.holders``.
 """
 
 import math
-from collections.abc import Callable, Sequence
+import sys
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -65,13 +68,36 @@ class Contact:
     speed: float  # normal approach speed before the response [m/s] (0 for sensors)
 
 
+COMPILE_NOTICE = (
+    "pinball_env: compiling the simulation's step loop for this kind of game and this Python, "
+    "once: one to three minutes on 2 cores (numba caches it beside the package; later runs "
+    "load it in seconds)"
+)
+
+
+@contextmanager
+def notice_if_slow(message: str, after: float = 5.0) -> Iterator[None]:
+    """Print ``message`` on standard error if the block still runs ``after`` seconds in: a
+    first compile's silent minutes said aloud (a load from numba's cache takes less, and says
+    nothing)."""
+    timer = threading.Timer(after, print, (message,), {"file": sys.stderr, "flush": True})
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+
+
 def compiled_entry(function: Callable[..., Any], args: tuple) -> Callable[..., Any]:
     """The compiled entry of numba function ``function`` for the types of ``args``, compiled
     (or loaded from the cache) by calling it with them: a call of the entry skips numba's
     dispatch, which infers the type of every array on every call (about 3.5 us for the
     kernel's 26, as long as the kernel takes for a ball). ``args`` must be a call that changes
-    nothing (no env). ``function`` itself with ``NUMBA_DISABLE_JIT``."""
-    function(*args)
+    nothing (no env). ``function`` itself with ``NUMBA_DISABLE_JIT``. A compile that takes
+    long says so (:data:`COMPILE_NOTICE`)."""
+    with notice_if_slow(COMPILE_NOTICE):
+        function(*args)
     overloads = getattr(function, "overloads", None)
     if overloads is None:
         return function

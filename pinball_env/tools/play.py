@@ -69,7 +69,7 @@ from pinball_env.render import BACKGROUND, SCOREBOARD_TEXT, SCOREBOARD_WIDTH, Wi
 from pinball_env.tools import command_parser
 from pinball_env.tools.demo import has_display
 
-ENV_ID = RECORDABLE_ENV_IDS[0]  # the env played by default
+ENV_ID = PROTOCOL_ENV_IDS[0]  # the env played by default: the benchmark's
 
 BANNER_PAUSED = "PAUSED\nP: play on"
 BANNER_OVER = "GAME OVER\nR: new game, Q: quit"

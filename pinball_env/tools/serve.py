@@ -33,8 +33,10 @@ import asyncio
 import contextlib
 import html
 import importlib.metadata
+import ipaddress
 import json
 import os
+import socket
 import sys
 from collections import deque
 from collections.abc import Callable
@@ -57,6 +59,7 @@ from pinball_env.recording import (
 )
 from pinball_env.tools import command_parser
 from pinball_env.tools.web.sessions import (
+    MAX_MESSAGE_BYTES,
     Message,
     PlaySession,
     Recorder,
@@ -73,7 +76,10 @@ if TYPE_CHECKING:  # the web extra is optional: imported where used (make_app)
     from starlette.websockets import WebSocket
 
 HOST = "127.0.0.1"  # this machine only; --host 0.0.0.0 opens it to the network
-LOCAL_NAMES = ("localhost", "127.0.0.1")  # what a page on this machine calls it (the Host)
+# What a page on this machine calls it (the Host header's name; an IPv6 address in brackets).
+LOCAL_NAMES = ("localhost", "127.0.0.1", "[::1]")
+# The page may not be framed by another site's (clickjacking).
+PAGE_HEADERS = {"X-Frame-Options": "DENY", "Content-Security-Policy": "frame-ancestors 'none'"}
 PORT = 8000
 MAX_VIEWERS = 8  # pages at once: each has its own game
 MAX_QUEUED = 32  # messages other than frames waiting for a slow page (the oldest dropped)
@@ -146,7 +152,7 @@ def make_app(
     viewers: set[Any] = set()
 
     async def index(request: Any) -> HTMLResponse:
-        return HTMLResponse(page)
+        return HTMLResponse(page, headers=PAGE_HEADERS)
 
     async def socket(websocket: WebSocket) -> None:
         if not await admitted(websocket, viewers, max_viewers):
@@ -216,8 +222,10 @@ async def play_session(
             message = await websocket.receive()
             if message["type"] == "websocket.disconnect":
                 raise disconnect(message.get("code", 1000))
-            # A binary message is refused by the session as any malformed one is.
-            for reply in session.receive(message.get("text") or message.get("bytes") or ""):
+            if message.get("text") is None:  # the page sends text (JSON), never binary
+                outbox.put(error("binary message refused: the page's messages are JSON text"))
+                continue
+            for reply in session.receive(message["text"]):
                 outbox.put(reply)
 
     async def tick() -> None:
@@ -261,7 +269,7 @@ def parser() -> argparse.ArgumentParser:
         help=f"pages at once, each its own game (default {MAX_VIEWERS})",
     )  # fmt: skip
     parser.add_argument(
-        "--env", choices=RECORDABLE_ENV_IDS, help=f"the env (default {RECORDABLE_ENV_IDS[0]})"
+        "--env", choices=RECORDABLE_ENV_IDS, help=f"the env (default {PROTOCOL_ENV_IDS[0]})"
     )
     parser.add_argument("--table", help="table name or YAML path (default: the env's own)")
     parser.add_argument(
@@ -326,8 +334,8 @@ def unwritable(path: Path) -> str | None:
 
 
 def default_env_id(args: argparse.Namespace) -> str:
-    """The env of the command line's game: ``--env``, else the protocol's or the first."""
-    return args.env or (PROTOCOL_ENV_IDS[0] if args.protocol else RECORDABLE_ENV_IDS[0])
+    """The env of the command line's game: ``--env``, else the protocol's."""
+    return args.env or PROTOCOL_ENV_IDS[0]
 
 
 def env_options(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
@@ -397,9 +405,17 @@ def agent_loader() -> Callable[[str], tuple[Callable[[], WatchedPlayer], str]]:
 
 
 def allowed_hosts(host: str) -> tuple[str, ...] | None:
-    """The Host names a server listening on ``host`` answers: this machine's own names when it
-    listens on it only, any name when it is opened to the network (``--host``)."""
-    return LOCAL_NAMES if host in LOCAL_NAMES else None
+    """The Host names a server listening on ``host`` answers: this machine's own names (and
+    ``host``) when it listens on a loopback address or ``localhost`` only, any name when it is
+    opened to the network (``--host``)."""
+    try:
+        loopback = host == "localhost" or ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a name other than localhost
+        loopback = False
+    if not loopback:
+        return None
+    own = f"[{host}]" if ":" in host else host
+    return tuple(dict.fromkeys((*LOCAL_NAMES, own)))
 
 
 def require_web() -> None:
@@ -411,11 +427,34 @@ def require_web() -> None:
         raise SystemExit(str(error)) from None
 
 
-def run(app: "Starlette", host: str, port: int) -> None:
-    """Serve ``app`` until interrupted (uvicorn)."""
+def server_config(app: "Starlette", log_level: str = "warning", **kwargs: Any) -> Any:
+    """uvicorn's settings of the server: a page's WebSocket messages longer than the sessions
+    take are refused by the WebSocket layer itself (closed, 1009), before they are read
+    whole."""
     uvicorn = require("uvicorn")
-    print(f"serving on http://{host}:{port}/ (Ctrl+C stops)", file=sys.stderr)
-    uvicorn.run(app, host=host, port=port, log_level="warning")
+    return uvicorn.Config(app, log_level=log_level, ws_max_size=MAX_MESSAGE_BYTES, **kwargs)
+
+
+def listening_socket(host: str, port: int) -> socket.socket:
+    """The server's socket, bound to ``host``:``port``; SystemExit saying so where it cannot
+    be (a port in use, an address not of this machine), before anything is served."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    try:
+        return socket.create_server((host, port), family=family)
+    except OSError as failure:
+        raise SystemExit(
+            f"cannot serve on {host} port {port}: {failure.strerror or failure} "
+            "(another server there? --port chooses another)"
+        ) from None
+
+
+def run(app: "Starlette", host: str, port: int) -> None:
+    """Serve ``app`` until interrupted (uvicorn), once its socket is bound."""
+    uvicorn = require("uvicorn")
+    listening = listening_socket(host, port)
+    shown = f"[{host}]" if ":" in host else host
+    print(f"serving on http://{shown}:{port}/ (Ctrl+C stops)", file=sys.stderr)
+    uvicorn.Server(server_config(app)).run(sockets=[listening])
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -35,8 +35,8 @@ def test_evaluation_is_deterministic_for_a_model_and_seeds(tmp_path):
 
 def test_baselines_evaluate_with_video(tmp_path):
     summary = evaluate.main(
-        ["--policy", "heuristic", "--episodes", "2", "--out", str(tmp_path / "h"),
-         "--video", str(tmp_path / "game.gif")]
+        ["--policy", "heuristic", "--env", "Pinball-v0", "--episodes", "2", "--out",
+         str(tmp_path / "h"), "--video", str(tmp_path / "game.gif")]
     )  # fmt: skip
     assert summary["policy"] == "heuristic" and summary["episodes"] == 2
     assert (tmp_path / "game.gif").read_bytes()[:6] == b"GIF89a"
@@ -47,8 +47,8 @@ def test_baselines_evaluate_with_video(tmp_path):
     # Every third frame of the game, and the first: the frames steps run on are in it too.
     assert len(iio.imread(tmp_path / "game.gif", index=None)) == -(-(length + 1) // 3)
     random = evaluate.main(
-        ["--policy", "random", "--episodes", "2", "--out", str(tmp_path / "r"),
-         "--video", str(tmp_path / "game.mp4")]
+        ["--policy", "random", "--env", "Pinball-v0", "--episodes", "2", "--out",
+         str(tmp_path / "r"), "--video", str(tmp_path / "game.mp4")]
     )  # fmt: skip
     assert json.loads((tmp_path / "r/summary.json").read_text()) == random
     assert (tmp_path / "game.mp4").read_bytes()[4:8] == b"ftyp"  # an MP4 container
@@ -66,10 +66,18 @@ def test_baselines_play_the_env_asked_for(tmp_path):
         evaluate.main(["--policy", "random", "--env", "Pinball-v1", "--table", "classic"])
 
 
-def test_report_writes_the_comparison_curve_and_game(tmp_path):
+def test_report_writes_the_comparison_curve_and_game(tmp_path, capsys):
     run = tiny_run(ROOT / "configs/agents/ppo.yaml", tmp_path / "runs", "env.num_envs=8",
                    "total_timesteps=8192", "hyperparams.n_steps=512")  # fmt: skip
+    capsys.readouterr()
     report = evaluate.report(run, episodes=2)
+    # Each long step says what it does before it starts, in order.
+    said = [line for line in capsys.readouterr().out.splitlines() if line.startswith("report: ")]
+    assert [line.split(" ")[1:3] for line in said] == [
+        ["playing", "the"], ["playing", "the"], ["playing", "the"], ["recording", "the"],
+        [str(run / "report.json") + ",", str(run / "learning_curve.png") + ","],
+    ]  # fmt: skip
+    assert "random" in said[0] and "heuristic" in said[1] and "model's 2 games" in said[2]
     assert set(report) == {"random", "heuristic", "model"}
     assert json.loads((run / "report.json").read_text()) == report
     assert (run / "learning_curve.png").read_bytes()[:4] == b"\x89PNG"

@@ -469,3 +469,31 @@ def throw_anywhere(world: World, env: int, rng: np.random.Generator) -> None:
     speed, heading = rng.uniform(0.0, 20.0), rng.uniform(0.0, 2.0 * math.pi)
     position = (rng.uniform(0.05, table.width - 0.05), rng.uniform(0.05, table.height - 0.05))
     world.place_ball(env, position, (speed * math.cos(heading), speed * math.sin(heading)))
+
+
+def test_a_long_compile_says_so_and_a_short_one_says_nothing(monkeypatch):
+    """compiled_entry's notice: printed once the block has run ``after`` seconds, never for a
+    block that ends before (a load from numba's cache)."""
+    import sys
+    import time
+
+    from pinball_env.sim.world import notice_if_slow
+
+    said: list[str] = []
+
+    class Stream:
+        def write(self, text: str) -> None:
+            said.append(text)
+
+        def flush(self) -> None:
+            pass
+
+    monkeypatch.setattr(sys, "stderr", Stream())
+    with notice_if_slow("compiling", after=0.01):
+        deadline = time.monotonic() + 30
+        while not said and time.monotonic() < deadline:
+            time.sleep(0.01)
+    with notice_if_slow("loaded", after=30):
+        pass
+    time.sleep(0.05)
+    assert "".join(said) == "compiling\n"

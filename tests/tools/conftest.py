@@ -18,7 +18,9 @@ def running(app: Any) -> Iterator[str]:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="error"))
+    from pinball_env.tools.serve import server_config  # (the tool's own settings)
+
+    server = uvicorn.Server(server_config(app, "error", host="127.0.0.1", port=port))
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
     for _ in range(600):  # started within a minute (the first env compiles nothing: cached)

@@ -70,7 +70,9 @@ def scripted(script: dict[int, list[Any]]) -> Callable[[], list[Any]]:
 
 @pytest.fixture
 def loop():
-    session = play.PlayLoop({"balls": 1}, seed=3, fps=0)  # fps 0: no waiting between frames
+    session = play.PlayLoop(
+        {"balls": 1}, seed=3, fps=0, env_id="Pinball-v0"
+    )  # fps 0: no waiting between frames
     yield session
     session.close()
 
@@ -218,7 +220,7 @@ def recorded(tmp_path_factory) -> tuple[Path, tuple[GameRecord, ...]]:
     """A recording of two games: one to game over with both flippers worked, then a restart,
     one that the player quits."""
     path = tmp_path_factory.mktemp("play") / "games.json"
-    session = play.PlayLoop({"balls": 1}, seed=3, record=path, fps=0)
+    session = play.PlayLoop({"balls": 1}, seed=3, record=path, fps=0, env_id="Pinball-v0")
     script = {
         0: [down(pygame.K_LSHIFT)],
         30: [up(pygame.K_LSHIFT)],
@@ -644,11 +646,15 @@ def test_the_command_line_plays_pinball_v1_and_the_protocols_v3(tmp_path, monkey
     assert data["options"] == {"table": "classic_v1"} and data["games"][0]["seed"] == 2
     out = capsys.readouterr().out
     assert "plunger: down / return" in out and "nudge up: up / b" in out
-    # Pinball-v0 by default, its keys as before.
-    play.main(["--seed", "2", "--record", str(tmp_path / "v0.json")])
+    # Pinball-v0's keys as before.
+    play.main(["--env", "Pinball-v0", "--seed", "2", "--record", str(tmp_path / "v0.json")])
     data = json.loads((tmp_path / "v0.json").read_text())
     assert data["env_id"] == "Pinball-v0" and data["options"] == {"table": "classic"}
     assert data["version"] == 1 and "plunger" not in capsys.readouterr().out
+    # The protocol's env by default (without its sticky actions: those are --protocol's).
+    play.main(["--seed", "2", "--record", str(tmp_path / "v3.json")])
+    data = json.loads((tmp_path / "v3.json").read_text())
+    assert data["env_id"] == "Pinball-v3" and data["options"] == {"table": "classic_v3"}
     with pytest.raises(SystemExit):  # argparse: the recording says which env
         play.main(["--replay", str(tmp_path / "r.json"), "--env", "Pinball-v1"])
     with pytest.raises(SystemExit):  # argparse: no such env

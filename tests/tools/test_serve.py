@@ -8,6 +8,7 @@ import dataclasses
 import functools
 import json
 import os
+import socket
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -22,6 +23,7 @@ from pinball_env.recording import replay as replay_recording
 from pinball_env.tools import serve
 from pinball_env.tools.play import COMMAND_KEYS
 from pinball_env.tools.web.sessions import (
+    MAX_MESSAGE_BYTES,
     MESSAGES,
     PlaySession,
     Recorder,
@@ -62,7 +64,9 @@ def recording_path(tmp_path_factory) -> Path:
         session.receive(json.dumps({"type": "buttons", "held": held}))
         session.tick()
         if tick == 500:
-            assert session.receive('{"type": "command", "command": "restart"}')[0]["games"] == 1
+            saved = session.receive('{"type": "command", "command": "restart"}')[0]
+            assert saved["games"] == 1
+            assert saved["path"] == "games.json"  # the page is not told the server's folders
     session.close()
     return path
 
@@ -399,9 +403,22 @@ def test_a_slow_page_skips_frames_and_its_queue_stays_bounded():
 def test_it_binds_to_this_machine_unless_told():
     args = serve.parser().parse_args([])
     assert (args.host, args.port) == ("127.0.0.1", 8000)
-    assert serve.allowed_hosts(args.host) == ("localhost", "127.0.0.1")
+    local = ("localhost", "127.0.0.1", "[::1]")
+    assert serve.allowed_hosts(args.host) == local
+    # Every loopback address keeps the Host check: this machine's names and its own.
+    assert serve.allowed_hosts("::1") == serve.allowed_hosts("localhost") == local
+    assert serve.allowed_hosts("127.0.0.2") == (*local, "127.0.0.2")
     assert serve.parser().parse_args(["--host", "0.0.0.0"]).host == "0.0.0.0"
-    assert serve.allowed_hosts("0.0.0.0") is None  # opened to the network: any name
+    for network in ("0.0.0.0", "::", "192.168.1.5", "pinball.example"):
+        assert serve.allowed_hosts(network) is None  # opened to the network: any name
+
+
+def test_a_busy_port_is_a_clear_error_before_anything_is_printed(capsys):
+    with socket.create_server(("127.0.0.1", 0)) as busy:
+        port = busy.getsockname()[1]
+        with pytest.raises(SystemExit, match=f"cannot serve on 127.0.0.1 port {port}: .*--port"):
+            serve.run(serve.make_app(lambda: PlaySession("Pinball-v1", seed=1)), "127.0.0.1", port)
+    assert capsys.readouterr().err == ""  # no "serving on" for a server that never served
 
 
 @pytest.mark.parametrize(
@@ -503,7 +520,7 @@ def test_the_agent_is_loaded_only_from_the_command_line(monkeypatch, capsys):
 
 def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
     websockets = pytest.importorskip("websockets.asyncio.client")
-    from websockets.exceptions import InvalidStatus
+    from websockets.exceptions import ConnectionClosed, InvalidStatus
 
     app = serve.make_app(lambda: PlaySession("Pinball-v1", seed=4), max_viewers=2)
 
@@ -516,11 +533,14 @@ def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
             assert hello["type"] == "hello" and hello["env_id"] == "Pinball-v1"
             assert json.loads(await second.recv())["type"] == "hello"
             await first.send("not json")
-            await first.send(b"\x00\xff")  # a binary message, as malformed
+            await first.send(b"\x00\xff")  # a binary message: refused, valid JSON or not
+            await first.send(b'{"type": "buttons", "held": ["right"]}')
             await first.send('{"type": "buttons", "held": ["left"]}')
-            errors, frames = 0, 0
-            while errors < 2 or not frames:
+            errors, frames, refused = 0, 0, []
+            while errors < 3 or not frames:
                 message = json.loads(await first.recv())
+                if message["type"] == "error":
+                    refused.append(message["message"])
                 errors += message["type"] == "error"
                 frames += message["type"] == "frame"
             lifted = None
@@ -529,16 +549,29 @@ def test_the_server_serves_its_page_and_state_only(serving, tmp_path):
                 if message["type"] == "frame":
                     lifted = message["games"][0]["flippers"][LEFT]
             assert lifted is not None and lifted > 0  # up (its rest is below 0)
+            assert all(e == "binary message refused: the page's messages are JSON text"
+                       for e in refused[1:])  # fmt: skip
             # A third page at once: over the cap, told so.
             async with websockets.connect(ws_url) as third:
                 assert "full" in json.loads(await third.recv())["message"]
+        # A message longer than the sessions take: the WebSocket layer closes the socket.
+        async with connect() as big:
+            await big.recv()
+            await big.send("x" * (MAX_MESSAGE_BYTES + 1))
+            with pytest.raises(ConnectionClosed) as closed:
+                while True:
+                    await big.recv()
+            assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009
         # Another site's page may not open the game's socket.
         with pytest.raises(InvalidStatus, match="403"):
             async with websockets.connect(ws_url, origin="http://evil.example"):
                 pass
 
     with serving(app) as url:
-        page = urllib.request.urlopen(url + "/").read().decode()
+        answer = urllib.request.urlopen(url + "/")
+        page = answer.read().decode()
+        assert answer.headers["X-Frame-Options"] == "DENY"  # no other site frames the page
+        assert answer.headers["Content-Security-Policy"] == "frame-ancestors 'none'"
         assert '<script src="/static/app.js">' in page
         assert urllib.request.urlopen(url + "/static/app.js").status == 200
         # A file one level above the static folder (it exists) is not served, however named.

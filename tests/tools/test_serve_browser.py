@@ -167,6 +167,25 @@ def test_two_pages_at_once_each_play_their_own_game(browser, serving):
         second.close()
 
 
+def test_a_full_server_says_so_and_keeps_saying_it(browser, serving):
+    """The server's "full" message stays in view after it closes the socket (the close handler
+    used to overwrite it with "disconnected")."""
+    app = serve.make_app(lambda: PlaySession("Pinball-v0", seed=4), max_viewers=1)
+    with serving(app) as url:
+        first = open_page(browser, url)
+        first.wait_for_function("window.pinball.hello !== null", timeout=TIMEOUT)
+        second = browser.new_page(viewport={"width": 720, "height": 900})
+        second.goto(url)
+        second.wait_for_function(
+            "document.getElementById('status').textContent.includes('disconnected')",
+            timeout=TIMEOUT,
+        )
+        status = second.evaluate("document.getElementById('status').textContent")
+        assert status.startswith("error: full: 1 pages at most"), status
+        first.close()
+        second.close()
+
+
 def screenshot(path: Path) -> None:
     """The docs' picture: a game of Pinball-v3 watched, the heuristic playing, some seconds in."""
     from tests.tools.conftest import running

@@ -235,7 +235,7 @@ class PlaySession(Session):
             )
         )
         games = len(self.recorder.recording.games)
-        return [{"type": "saved", "path": str(self.recorder.path), "games": games}]
+        return [{"type": "saved", "path": self.recorder.path.name, "games": games}]  # no folder
 
     @property
     def action(self) -> int:

@@ -19,7 +19,10 @@ pinball.send = (message) => {
 };
 
 socket.onopen = () => setStatus("connected");
-socket.onclose = () => setStatus("disconnected: reload the page to reconnect");
+// A server that closes after saying why (full, no game) keeps its reason in view.
+socket.onclose = () => setStatus(pinball.hello || !pinball.errors.length
+  ? "disconnected: reload the page to reconnect"
+  : `error: ${pinball.errors[pinball.errors.length - 1]} (disconnected: reload to retry)`);
 socket.onmessage = (event) => {
   pinball.received.messages += 1;
   pinball.received.bytes += event.data.length;
