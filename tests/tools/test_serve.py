@@ -102,6 +102,22 @@ def test_hello_sends_the_geometry_once_and_frames_send_the_state(env_id):
     session.close()
 
 
+def test_each_ball_on_the_table_is_sent_once_a_frame():
+    """On Pinball-v3 the game's ball is a copy of a ball in play (or stands for the one queued
+    in the lane): a frame lists it once, then every other ball on the table."""
+    session = PlaySession("Pinball-v3", seed=2)
+    world, seen = session.core.game.world, 0
+    for tick in range(1500):  # plunge, then flip in a rhythm
+        held = ["plunger"] if tick % 400 < 40 else ["left", "right"] if tick % 30 < 5 else []
+        session.receive(json.dumps({"type": "buttons", "held": held}))
+        balls = [tuple(ball) for ball in frame(session.tick())["balls"]]
+        assert len(set(balls)) == len(balls), (tick, balls)
+        assert len(balls) - 1 <= int(world.active[0].sum()) <= len(balls)
+        seen += int(world.active[0].sum()) > 0
+    assert seen > 1000  # (a ball on the table most of the time)
+    session.close()
+
+
 @pytest.mark.parametrize("env_id", RECORDABLE_ENV_IDS)
 def test_the_page_buttons_are_the_play_tools_keys_and_actions(env_id):
     """Every key of the play tool has its browser name, and every button held gives the action
@@ -293,6 +309,31 @@ def test_the_replay_is_the_recorded_game_bitwise(recording_path):
     assert frame(session.tick())["score"] == recording.games[1].score
     session.close()
     straight.close()
+
+
+def test_a_replay_shows_game_over_only_at_the_end_of_a_game_that_ended(recording_path, tmp_path):
+    def states_at_ends(recording):  # each game's last frame and the one before, replayed
+        session, states = ReplaySession(ReplayIndex(recording)), []
+        for game in range(len(recording.games)):
+            session.receive(json.dumps({"type": "game", "game": game}))
+            for back in (1, 0):
+                at = recording.games[game].frames - back
+                session.receive(json.dumps({"type": "seek", "frame": at}))
+                states.append(frame(session.tick())["over"])
+        session.close()
+        return states
+
+    # The fixture's games ended by a restart and by the page closed: never GAME OVER.
+    assert states_at_ends(load_recording(recording_path)) == [False] * 4
+    path = tmp_path / "drained.json"  # one ball, no flips: the game ends by itself
+    recorder = Recorder(path, gym.make("Pinball-v0"), "Pinball-v0", {"balls": 1})
+    session = PlaySession("Pinball-v0", {"balls": 1}, seed=5, recorder=recorder)
+    while not session.over:
+        session.tick()
+    session.close()
+    recording = load_recording(path)
+    assert [game.end for game in recording.games] == ["game over"]
+    assert states_at_ends(recording) == [False, True]
 
 
 def test_a_seek_to_the_end_of_a_game_of_whole_snapshot_periods(recording_path):

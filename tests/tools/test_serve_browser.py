@@ -147,6 +147,17 @@ def test_a_recording_replays_to_its_recorded_score(browser, serving, tmp_path):
         page.wait_for_function(
             f"window.pinball.drawn.replay.frame === {middle + 1}", timeout=TIMEOUT
         )
+        # Playing, a click on the slider seeks there; then playback moves the slider on again
+        # (the slider keeps the focus: the page used to stop moving it).
+        page.select_option("#speed", "1")
+        page.click("#play")
+        page.wait_for_function("window.pinball.drawn.replay.playing", timeout=TIMEOUT)
+        page.click("#timeline", position={"x": 5, "y": 5})  # near the start
+        page.wait_for_function("window.pinball.drawn.replay.frame < 60", timeout=TIMEOUT)
+        assert page.evaluate("document.activeElement.id") == "timeline"
+        page.wait_for_function(
+            "Number(document.getElementById('timeline').value) > 90", timeout=TIMEOUT
+        )
         page.close()
 
 
@@ -165,6 +176,39 @@ def test_two_pages_at_once_each_play_their_own_game(browser, serving):
         first.keyboard.up("z")
         first.close()
         second.close()
+
+
+CANVAS_BOX = """() => {
+  const r = document.getElementById("table0").getBoundingClientRect();
+  return [r.left, r.right, r.top, r.bottom];
+}"""
+
+
+@pytest.mark.parametrize(("width", "height"), [(390, 844), (1600, 900)])
+def test_the_table_fits_the_screen_and_stays_put_when_an_alert_appears(
+    browser, serving, width, height
+):
+    """A phone's and a wide screen's page: the whole table in view (nothing cut off at the
+    left, no sideways scroll), drawn at its own aspect ratio; WARNING and GAME OVER appearing
+    on the board do not move it."""
+    app = serve.make_app(lambda: PlaySession("Pinball-v1", seed=2))
+    with serving(app) as url:
+        page = browser.new_page(viewport={"width": width, "height": height})
+        page.goto(url)
+        page.wait_for_function("window.pinball.framesDrawn > 10", timeout=TIMEOUT)
+        left, right, top, bottom = box = page.evaluate(CANVAS_BOX)
+        assert 0 <= left < right <= width, box
+        assert page.evaluate("document.documentElement.scrollWidth") <= width
+        pixels = page.evaluate("[table0.width, table0.height]")
+        assert (bottom - top) / (right - left) == pytest.approx(pixels[1] / pixels[0], rel=0.02)
+        # The longest alerts on the board (drawn as a frame draws them), measured at once.
+        alerted = page.evaluate(f"""() => {{
+            const state = {{...window.pinball.drawn.games[0], warnings: 3, over: true}};
+            drawBoard(views[0], state, false);
+            return ({CANVAS_BOX})();
+        }}""")
+        assert alerted == box
+        page.close()
 
 
 def test_a_full_server_says_so_and_keeps_saying_it(browser, serving):

@@ -54,6 +54,7 @@ from pinball_env.tools.play import COMMAND_KEYS, held_action
 from pinball_env.tools.web.stream import frame_state, geometry, page_keys
 
 MAX_MESSAGE_BYTES = 4096  # a page's messages are a few dozen bytes; larger ones are refused
+GAME_ENDINGS = ("game over", "time limit")  # a recorded game's ends that ended the game itself
 MAX_SPEED = 16.0  # a replay's frames per tick, at most (and 1 / MAX_SPEED at least)
 MAX_STEP = 3600  # frames a replay's step moves at most (a minute)
 SNAPSHOT_EVERY = 300  # [frames] a replay keeps a snapshot this often (5 s), to scrub from
@@ -537,7 +538,9 @@ class ReplaySession(Session):
             self._goto(self.frame + frames)
             if self.frame >= len(self.actions):
                 self.playing = False
-        state = frame_state(self.core, self.frame >= len(self.actions))
+        # GAME OVER at the end of a game that ended (not one the player restarted or left).
+        ended = self.index.recording.games[self.game].end in GAME_ENDINGS
+        state = frame_state(self.core, ended and self.frame >= len(self.actions))
         timeline = {"game": self.game, "frame": self.frame, "frames": len(self.actions),
                     "playing": self.playing, "speed": self.speed}  # fmt: skip
         return [{"type": "frame", "games": [state], "replay": timeline}]

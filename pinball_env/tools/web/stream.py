@@ -136,8 +136,10 @@ def frame_state(env: PinballEnv, over: bool = False) -> dict[str, Any]:
     world = game.world
     table = world.table_of(0)
     balls = [game.state.game_ball[0, :2]]
-    if game.multi is not None:  # every ball on the table, as the frame draws them
-        balls += list(world.balls[0, world.active[0], :2])
+    if game.multi is not None:  # every other ball on the table, as the frame draws them (the
+        # game's ball is a copy of one of them, or stands for one queued in the lane)
+        balls += [ball for ball in world.balls[0, world.active[0], :2]
+                  if not np.array_equal(ball, balls[0])]  # fmt: skip
     info = game.info(0)
     state: dict[str, Any] = {
         "frame": int(info["frames"]),

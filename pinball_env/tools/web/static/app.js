@@ -6,7 +6,7 @@
 
 // What the page shows, for people and for the browser tests: the last state drawn, counts.
 const pinball = (window.pinball = {
-  hello: null, timeline: null, drawn: null, framesDrawn: 0, errors: [], saved: null,
+  hello: null, timeline: null, drawn: null, framesDrawn: 0, errors: [], saved: null, dragging: false,
   received: { messages: 0, bytes: 0 }, send: null,
 });
 
@@ -268,6 +268,10 @@ function startReplay(hello) {
   speed.onchange = () => pinball.send({ type: "speed", speed: Number(speed.value) });
   const timeline = document.getElementById("timeline");
   timeline.oninput = () => { seekTo = Number(timeline.value); };
+  // While the slider is held it is the page's to move; once let go, playback moves it again
+  // (focus stays on a clicked slider, so focus cannot say which).
+  timeline.addEventListener("pointerdown", () => { pinball.dragging = true; });
+  window.addEventListener("pointerup", () => { pinball.dragging = false; });
 }
 
 function replayKey(event, down) {
@@ -301,7 +305,7 @@ function showTimeline(timeline) {
 
 function showPosition(replay) {
   const slider = document.getElementById("timeline");
-  if (document.activeElement !== slider) slider.value = replay.frame;
+  if (!pinball.dragging) slider.value = replay.frame;
   document.getElementById("play").textContent = replay.playing ? "pause" : "play";
   const scores = pinball.timeline ? pinball.timeline.scores : [];
   document.getElementById("position").textContent =
