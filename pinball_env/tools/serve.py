@@ -160,8 +160,8 @@ def make_app(
         viewers.add(websocket)
         session = None
         try:
-            try:
-                session = factory()
+            try:  # (off the event loop: the other pages play on meanwhile)
+                session = await asyncio.to_thread(factory)
             except Exception as failure:  # the page says why, the server log has the rest
                 await websocket.send_text(encode(error(f"no game could start: {failure}")))
                 raise
@@ -457,12 +457,32 @@ def run(app: "Starlette", host: str, port: int) -> None:
     uvicorn.Server(server_config(app)).run(sockets=[listening])
 
 
+def unrecorded(args: argparse.Namespace) -> argparse.Namespace:
+    """``args`` without ``--record``."""
+    return argparse.Namespace(**{**vars(args), "record": None})
+
+
+def prepare(factory: SessionFactory) -> None:
+    """A page's game made and played a frame before the server answers: its kernels compiled
+    (the first time on a machine and Python: minutes, which the line says) or loaded from
+    numba's cache, so that no page waits on a compile and no compile holds up the pages."""
+    print("preparing the game: its kernels compile the first time on a machine (one to three "
+          "minutes), then load from numba's cache", file=sys.stderr, flush=True)  # fmt: skip
+    session = factory()
+    try:
+        session.tick()
+    finally:
+        session.close()
+
+
 def main(argv: list[str] | None = None) -> None:
     command = parser()
     args = command.parse_args(argv)
     check_args(command, args)
     require_web()
     factory, title = session_factory(args)
+    # (a game played on a page with --record is recorded: the one prepared is not)
+    prepare(factory if args.record is None else session_factory(unrecorded(args))[0])
     run(make_app(factory, args.max_viewers, title, allowed_hosts(args.host)), args.host, args.port)
 
 

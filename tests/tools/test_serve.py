@@ -25,6 +25,7 @@ from pinball_env.tools.play import COMMAND_KEYS
 from pinball_env.tools.web.sessions import (
     MAX_MESSAGE_BYTES,
     MESSAGES,
+    SNAPSHOT_EVERY,
     PlaySession,
     Recorder,
     ReplayIndex,
@@ -633,3 +634,80 @@ def test_the_web_files_are_package_data():
     assert {p.name for p in static.iterdir()} >= {"index.html", "app.js", "style.css"}
     pyproject = (Path(__file__).resolve().parents[2] / "pyproject.toml").read_text()
     assert '"pinball_env.tools" = ["web/static/*"]' in pyproject
+
+
+def test_a_page_scrubbing_a_replay_does_not_stall_another_page(serving, tmp_path):
+    """Each page's game work runs off the shared event loop: another page's frames keep
+    coming while one page seeks as fast as it can (measured against the same page's rate
+    with nobody seeking, in the same run), on Pinball-v3, whose frames cost the most."""
+    websockets = pytest.importorskip("websockets.asyncio.client")
+    path = tmp_path / "v3.json"
+    recorder = Recorder(path, gym.make("Pinball-v3"), "Pinball-v3", {})
+    session = PlaySession("Pinball-v3", {}, seed=3, recorder=recorder)
+    for tick in range(2 * SNAPSHOT_EVERY):
+        held = ["plunger"] if tick < 40 else ["left", "right"] if tick % 25 < 4 else []
+        session.receive(json.dumps({"type": "buttons", "held": held}))
+        session.tick()
+    session.close()
+    index = ReplayIndex(load_recording(path))
+    app = serve.make_app(lambda: ReplaySession(index), max_viewers=2)
+    frames = index.recording.games[0].frames
+
+    async def frame_rate(url: str, scrub: bool) -> float:
+        ws_url = url.replace("http", "ws") + "/ws"
+        connect = functools.partial(websockets.connect, ws_url, max_queue=None)
+        async with connect() as watcher, connect() as scrubber:
+            await watcher.send('{"type": "play"}')
+            stop = asyncio.Event()
+
+            async def seek() -> None:  # to and fro, as fast as it is taken: each seek back
+                # restores the snapshot before it and steps on almost a snapshot period
+                while not stop.is_set():
+                    for frame in (far, far - 1):
+                        await scrubber.send(json.dumps({"type": "seek", "frame": frame}))
+                        await asyncio.sleep(0.002)
+
+            async def drain(socket) -> None:
+                while True:
+                    message = json.loads(await socket.recv())
+                    if message["type"] == "frame":
+                        shown.append(message["replay"]["frame"])
+
+            tasks = [asyncio.create_task(drain(scrubber))]
+            if scrub:
+                tasks.append(asyncio.create_task(seek()))
+            loop, seen = asyncio.get_running_loop(), 0
+            start = loop.time()
+            while loop.time() - start < 3.0:
+                seen += json.loads(await watcher.recv())["type"] == "frame"
+            rate = seen / (loop.time() - start)
+            stop.set()
+            for task in tasks:
+                task.cancel()
+            return rate
+
+    shown: list[int] = []  # the scrubbing page's frames
+    far = min(frames, SNAPSHOT_EVERY) - 1
+    with serving(app) as url:
+        alone = asyncio.run(frame_rate(url, scrub=False))
+        beside = asyncio.run(frame_rate(url, scrub=True))
+    assert beside >= 0.8 * alone, (alone, beside)
+    assert {far - 1, far} <= set(shown[-30:])  # (the scrubbing page's seeks were played)
+
+
+def test_the_game_is_prepared_before_the_server_answers_and_not_recorded(tmp_path, monkeypatch):
+    """main plays a game's first frame (its kernels compiled or loaded) before it serves, says
+    so, and the prepared game is no page's: --record holds none of it."""
+    events: list[str] = []
+    real_prepare = serve.prepare
+
+    def prepare(factory):
+        events.append("prepare")
+        real_prepare(factory)
+
+    monkeypatch.setattr(serve, "prepare", prepare)
+    monkeypatch.setattr(serve, "run", lambda app, host, port: events.append("run"))
+    path = tmp_path / "games.json"
+    serve.main(["--env", "Pinball-v0", "--record", str(path)])
+    assert events == ["prepare", "run"]
+    assert not path.exists() or load_recording(path).games == ()
