@@ -53,6 +53,7 @@ class Validation:
             self.venv.training = False  # (before the reset, which would update them)
             self.venv.norm_reward = False
         self.venv.seed(games.start)  # the same games every time
+        say(f"validating at {model.num_timesteps} steps: {len(games)} games...")
         played = rollouts(self.venv, model_policy(model), list(games))
         summary = summarize(played)
         best = self.best

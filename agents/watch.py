@@ -9,6 +9,7 @@ from typing import Any
 
 from agents.config import AnyConfig
 from agents.envs import make_env_chain
+from agents.gif import GifWriter
 from agents.policy import ObsNormalization
 from agents.rollouts import VecPolicy
 
@@ -27,8 +28,9 @@ def record_video(
     fps = game.table.simulation.frame_rate  # every frame is recorded, those a step runs on too
     stride = max(1, round(fps / 20)) if path.suffix.lower() == ".gif" else 1  # small GIFs
     path.parent.mkdir(parents=True, exist_ok=True)
+    writer: Any
     if path.suffix.lower() == ".gif":
-        writer = imageio.get_writer(path, duration=1000 * stride / fps, loop=0)
+        writer = GifWriter(path, duration_ms=1000 * stride / fps)
     else:
         writer = imageio.get_writer(path, fps=fps, macro_block_size=1)
     obs = venv.reset()

@@ -24,7 +24,12 @@ def test_validation_keeps_the_best_model_and_goes_on_after_a_resume(tmp_path, ca
     best = max(rows, key=lambda row: float(row["score_mean"]))
     assert (run / "model.zip").read_bytes() == (run / "best_model.zip").read_bytes()
     assert PPO.load(run / "model.zip").num_timesteps == int(best["steps"])
-    assert f"at {best['steps']} steps" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert f"at {best['steps']} steps" in out
+    # Each validation says it has begun before its games, then what they scored.
+    said = [line.split(":")[0] for line in out.splitlines() if " at " in line and "steps" in line]
+    assert said[:4] == ["validating at 128 steps", "validation at 128 steps",
+                        "validating at 256 steps", "validation at 256 steps"]  # fmt: skip
     # The model replays its validation games through its saved chain, to the same scores.
     trained = load_policy(run)
     venv = make_env_chain(trained.config, num_envs=3, seed=300_000, frozen=trained.normalization)
