@@ -46,6 +46,7 @@ METHODS: dict[str, Method] = {
     "random-v3": Method("Pinball-v3", baseline="random"),
     "heuristic-v3": Method("Pinball-v3", baseline="heuristic"),
     "ppo-scale-v3": Method("Pinball-v3", "ppo_scale_v3.yaml", tiny=_TINY_PPO),
+    "ppo-tuned-v3": Method("Pinball-v3", "ppo_tuned_v3.yaml", tiny=_TINY_PPO),
     "random-v2": Method("Pinball-v2", baseline="random"),
     "heuristic-v2": Method("Pinball-v2", baseline="heuristic"),
     "ppo-scale-v2": Method("Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO),
