@@ -154,7 +154,7 @@ def make_app(
     async def index(request: Any) -> HTMLResponse:
         return HTMLResponse(page, headers=PAGE_HEADERS)
 
-    async def socket(websocket: WebSocket) -> None:
+    async def game_socket(websocket: WebSocket) -> None:
         if not await admitted(websocket, viewers, max_viewers):
             return
         viewers.add(websocket)
@@ -176,7 +176,7 @@ def make_app(
         routes=[
             Route("/", index),
             Mount("/static", StaticFiles(directory=STATIC), name="static"),
-            WebSocketRoute("/ws", socket),
+            WebSocketRoute("/ws", game_socket),
         ],
         middleware=trusted,
     )
