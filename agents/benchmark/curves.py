@@ -60,4 +60,5 @@ def draw_curves(ax: Any, methods: dict[str, Any], env_id: str) -> None:
     ax.axhline(1.0, color="grey", linewidth=0.8, linestyle=":")
     ax.set_xlabel("frames trained [M]")
     ax.set_ylabel("normalised validation IQM (random 0, heuristic 1)")
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:  # (an env whose runs recorded no curve: no legend)
+        ax.legend(fontsize=8)
