@@ -156,7 +156,7 @@ class PinballEnv(CoreAttributes, gym.Env):
         return None if self.spec is None else self.spec.id
 
     # (gymnasium types render() with its RenderFrame type variable, which no env can bind)
-    def render(self) -> np.ndarray | None:  # type: ignore[override]
+    def render(self) -> np.ndarray | None:  # type: ignore[override, unused-ignore]
         if self.render_mode is None:
             gym.logger.warn(
                 "render() called without a render_mode; pass render_mode='rgb_array' or "

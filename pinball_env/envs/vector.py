@@ -287,7 +287,7 @@ class PinballVectorEnv(CoreAttributes, VectorEnv):
         return None if self.spec is None else self.spec.id
 
     # (gymnasium types render() with its RenderFrame type variable, which no env can bind)
-    def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override]
+    def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override, unused-ignore]
         """Every env's frame (the playfield and a scoreboard), for ``render_mode="rgb_array"``:
         each the frame of the single env."""
         if self.render_mode is None:
