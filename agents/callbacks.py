@@ -133,7 +133,7 @@ class Progress(BaseCallback):
                                self.counter.frames)  # fmt: skip
 
     def _on_training_end(self) -> None:
-        self.bar.close()
+        self.bar.close(self.num_timesteps, self.counter.frames)
 
     def _on_step(self) -> bool:
         dones, infos = self.locals["dones"], self.locals["infos"]

@@ -136,7 +136,11 @@ class ProgressBar:
         if self.bar is not None:
             self.bar.set_postfix(score=f"{score:.0f}", refresh=False)
 
-    def close(self) -> None:
+    def close(self, steps: int | None = None, frames: int | None = None) -> None:
+        """Show the last ``steps`` (and ``frames``) however soon after the last update, so
+        that a training the budget stopped ends at 100%; then close the bar."""
+        if steps is not None:
+            self.update(steps, force=True, frames=frames)
         if self.bar is not None:
             self.bar.close()
 

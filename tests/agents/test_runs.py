@@ -77,6 +77,26 @@ def test_the_training_bar_ends_where_the_frame_budget_stops_it():
     bar.close()
 
 
+def test_the_training_bar_shows_its_last_step_however_soon_it_closes(monkeypatch):
+    # The bar redraws at most twice a second; the training's last steps come sooner than that
+    # after the update before them, and closing shows them: a run the budget stopped ends at 100%.
+    from agents.runs import ProgressBar
+
+    clock = [1000.0]
+    monkeypatch.setattr("agents.runs.time.monotonic", lambda: clock[0])
+    config = load_config(ROOT / "configs/agents/ppo.yaml",
+                         ["total_timesteps=1000", "total_frames=600"])  # fmt: skip
+    bar = ProgressBar(config, 0, deadline=float("inf"), show=True, frames=0)
+    clock[0] = 1001.0
+    bar.update(100, frames=200)
+    clock[0] = 1001.1
+    bar.update(280, frames=560)  # (too soon: not drawn)
+    assert bar.bar.n == 100
+    clock[0] = 1001.2
+    bar.close(302, frames=604)
+    assert bar.bar.n == bar.bar.total == 302
+
+
 def test_news_of_a_training_is_written_above_its_bar(capsys):
     from agents.runs import say
 
