@@ -629,7 +629,9 @@ def table(result: dict) -> str:
 
 def parser() -> argparse.ArgumentParser:
     """The command line."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    from pinball_env.tools import command_parser  # (here: older trees' packages lack it)
+
+    parser = command_parser("benchmarks.speed", __doc__)
     parser.add_argument("--quick", action="store_true", help="short run (about 20x fewer steps)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path, help="also write the figures to this file")

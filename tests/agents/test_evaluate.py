@@ -137,14 +137,20 @@ def test_watch_without_a_display_stops_at_once_and_points_to_the_browser(monkeyp
 
 
 @pytest.mark.parametrize(
-    "module",
-    ["agents.evaluate", "agents.train", "pinball_env.tools.play", "pinball_env.tools.serve"],
-)
-def test_help_names_the_command_and_reads_as_plain_text(module, capsys):
+    ("module", "entry"),
+    [("agents.evaluate", None), ("agents.train", None), ("agents.generalization", None),
+     ("agents.benchmark", "agents.benchmark.cli"), ("pinball_env.tools.play", None),
+     ("pinball_env.tools.serve", None), ("pinball_env.tools.plot", None),
+     ("pinball_env.tools.demo", None), ("pinball_env.tools.tilt", None),
+     ("pinball_env.tools.crosscheck", "pinball_env.tools.crosscheck.cli"),
+     ("benchmarks.speed", None), ("benchmarks.first_compile", None),
+     ("benchmarks.promises", None)],
+)  # fmt: skip
+def test_help_names_the_command_and_reads_as_plain_text(module, entry, capsys):
     import importlib
 
     with pytest.raises(SystemExit):
-        importlib.import_module(module).main(["--help"])
+        importlib.import_module(entry or module).main(["--help"])
     text = capsys.readouterr().out
     assert text.startswith(f"usage: python -m {module}") and "``" not in text
 

@@ -5,11 +5,11 @@ Runs every scenario of :mod:`.scenarios` on both engines and writes a report to 
 and ``crosscheck.png`` (:mod:`.plots`). Needs the ``crosscheck`` extra (pymunk, matplotlib).
 """
 
-import argparse
 import json
 from pathlib import Path
 from typing import Any
 
+from pinball_env.tools import command_parser
 from pinball_env.tools.crosscheck.plots import plot
 from pinball_env.tools.crosscheck.report import headline_figures, print_report
 from pinball_env.tools.crosscheck.scenarios import (
@@ -80,9 +80,7 @@ def run(out: Path, trials: int = 100, free_frames: int = 600) -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(
-        prog="python -m pinball_env.tools.crosscheck", description=__doc__.splitlines()[0]
-    )
+    parser = command_parser("pinball_env.tools.crosscheck", __doc__)
     parser.add_argument("--out", type=Path, default=Path("outputs/crosscheck"))
     parser.add_argument("--trials", type=int, default=100, help="aimed shots per speed")
     parser.add_argument("--frames", type=int, default=600, help="frames of the free run")
