@@ -13,14 +13,15 @@ from agents.benchmark.shipping import parse_ship, ship
 from agents.benchmark.tables import print_table
 from agents.config import ConfigError
 from pinball_env import protocol
+from pinball_env.tools import command_parser
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any] | None:
-    parser = argparse.ArgumentParser(
-        prog="python -m agents.benchmark", description=agents.benchmark.__doc__.split("\n")[0]
-    )
-    parser.add_argument("--methods", nargs="+", choices=list(METHODS), default=list(METHODS),
-                        help="the rows (default: all)")  # fmt: skip
+    parser = command_parser("agents.benchmark", agents.benchmark.__doc__)
+    parser.add_argument(
+        "--methods", nargs="+", choices=list(METHODS), default=list(METHODS), metavar="METHOD",
+        help=f"the rows (default: all): {', '.join(METHODS)}",
+    )  # fmt: skip
     parser.add_argument("--seeds", nargs="+", type=int, default=list(protocol.TRAINING_SEEDS),
                         help="training seeds (default: the protocol's)")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("runs/benchmark"), help="results")
