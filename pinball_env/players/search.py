@@ -1,27 +1,29 @@
 """A player that looks ahead in the simulator itself: :class:`SearchPolicy`.
 
-Before each action it saves the game it plays (``clone_state``, without the env's random
+Before it decides, it saves the game it plays (``clone_state``, without the env's random
 stream: the look-ahead does not see the draws to come, of the sticky actions or the
-launches), branches it into a small native vector env, one env per candidate, and plays every
-branch ``horizon`` steps on: a candidate holds one flipper action (none, left, right, both)
-for its first ``hold`` steps, after which the scripted heuristic (``HeuristicPolicy``, each
-branch its own copy as it is now) plays on; one more candidate is the heuristic throughout.
-Each branch is scored by the points it made, less ``drain_cost`` for each ball it lost; the
-best candidate's first action is played (ties go to the heuristic's, then to the order of the
-candidates). The look-ahead plays without sticky actions (a planner cannot know the draws);
-the game it chooses for plays under whatever the env has (the benchmark protocol's sticky
-actions act on the actions it plays). While no ball in play is below ``low`` (a share of the
-table's height) there is nothing to choose: the heuristic plays (its plunge and nudges too).
+launches), branches it into a small native vector env, one env per candidate plan, and plays
+every branch ``horizon`` steps on. A plan is the scripted heuristic (``HeuristicPolicy``, each
+branch its own copy as it is now) with, first, one flipper action (none, left, right, both)
+held for ``hold`` steps, or with another ``aim`` (where on a flipper it shoots a ball rolling
+down it, a share of the flipper's length); one plan is the heuristic as it is. Each branch is
+scored by the points it made, less ``drain_cost`` for each ball it lost, and the best plan
+(ties go to the heuristic's, then to the order of the plans) plays the next ``decide_every``
+steps, as it played in its branch; a chosen aim stays the heuristic's until another is chosen.
+The look-ahead plays without sticky actions (a planner cannot know the draws); the game it
+chooses for plays under whatever the env has (the benchmark protocol's sticky actions act on
+the actions it plays). While no ball in play is below ``low`` (a share of the table's height)
+there is nothing to choose: the heuristic plays (its plunge and nudges too).
 
-Its compute per decision is the settings': ``len(holds) * 4 + 1`` branches of ``horizon``
-steps each, one decision every ``decide_every`` steps (the action held in between). It is a
-reference of what looking ahead in the simulator reaches (the benchmark's ``search-v3`` and
+Its compute per decision is the settings': ``1 + len(aims) + 4 * len(holds)`` branches of
+``horizon`` steps each, one decision every ``decide_every`` steps while a ball is low. It is
+a reference of what looking ahead in the simulator reaches (the benchmark's ``search-v3`` and
 ``search-v2``), not a learner, and a teacher a policy can be trained from.
 """
 
 import dataclasses
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -37,6 +39,15 @@ HEURISTIC_INFO = ("ball_position", "ball_velocity", "ball_positions", "ball_velo
                   "tilted")  # fmt: skip
 
 
+class Plan(NamedTuple):
+    """A candidate of the look-ahead: ``action`` (a flipper action, -1 for none) held for its
+    first ``hold`` steps, then the heuristic, with ``aim`` (None: the aim it has)."""
+
+    action: int = -1
+    hold: int = 0
+    aim: float | None = None
+
+
 @dataclasses.dataclass(frozen=True)
 class SearchSettings:
     """The planner's compute and scoring (module docstring)."""
@@ -44,9 +55,11 @@ class SearchSettings:
     horizon: int = 45
     """Steps each branch plays on (at frame skip 1, 60 steps are a second)."""
     holds: tuple[int, ...] = (2, 8)
-    """Steps a candidate holds its flipper action before the heuristic plays on."""
+    """Steps a plan holds its flipper action before the heuristic plays on."""
+    aims: tuple[float, ...] = ()
+    """The heuristic's other aims a plan may take (shares of a flipper's length)."""
     decide_every: int = 1
-    """A decision every this many steps, its action held in between."""
+    """A decision every this many steps while a ball is low, the chosen plan played between."""
     low: float = 0.45
     """The search runs while a ball in play is below this share of the table's height."""
     drain_cost: float = 20_000.0
@@ -56,16 +69,21 @@ class SearchSettings:
         for name in ("horizon", "decide_every"):
             if not (isinstance(getattr(self, name), int) and getattr(self, name) >= 1):
                 raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)!r}")
-        if not self.holds or not all(isinstance(h, int) and 1 <= h <= self.horizon
-                                     for h in self.holds):  # fmt: skip
+        if not all(isinstance(h, int) and 1 <= h <= self.horizon for h in self.holds):
             raise ValueError(f"holds must be integers from 1 to horizon, got {self.holds!r}")
+        if not all(isinstance(a, int | float) and 0.0 < a <= 1.0 for a in self.aims):
+            raise ValueError(f"aims must be shares of a flipper's length (0-1], got {self.aims!r}")
+        if not (self.holds or self.aims):
+            raise ValueError("holds or aims must give a plan besides the heuristic's")
         if not 0.0 <= self.low <= 1.0:
             raise ValueError(f"low must be a share of the table's height (0-1), got {self.low}")
 
     @property
-    def candidates(self) -> list[tuple[int, int]]:
-        """(action, hold) of each candidate but the heuristic's (action -1)."""
-        return [(-1, 0)] + [(action, hold) for hold in self.holds for action in FLIPPER_ACTIONS]
+    def candidates(self) -> list[Plan]:
+        """The plans of each decision: the heuristic as it is first, then its other aims, then
+        each flipper action held for each of ``holds``."""
+        held = [Plan(action, hold) for hold in self.holds for action in FLIPPER_ACTIONS]
+        return [Plan()] + [Plan(aim=float(aim)) for aim in self.aims] + held
 
 
 class SearchPolicy:
@@ -84,32 +102,34 @@ class SearchPolicy:
         kwargs = {**options.to_kwargs(), "render_mode": None, "repeat_action_probability": 0.0}
         self.table = self.game_env.table
         self.heuristic = HeuristicPolicy(self.table)
+        self.base_aim = self.heuristic.aim
         if env.spec is None:
             raise ValueError("SearchPolicy plays an env made by gym.make (its id)")
         self.branches: Any = gym.make_vec(env.spec.id, num_envs=len(self.settings.candidates),
                                           num_threads=1, **kwargs)  # fmt: skip
         self.decisions = self.branch_steps = 0
-        self._held = (0, 0)  # the action being held, and steps left
+        self._plan, self._step = Plan(), self.settings.decide_every  # (played: decide)
 
     def reset(self) -> None:
-        """A new game: the heuristic forgets the last."""
+        """A new game: the heuristic forgets the last, and takes its own aim again."""
         self.heuristic.reset()
-        self._held = (0, 0)
+        self.heuristic.aim = self.base_aim
+        self._plan, self._step = Plan(), self.settings.decide_every
 
     def close(self) -> None:
         self.branches.close()
 
     def __call__(self, info: Mapping[str, Any]) -> int:
+        if self._step >= self.settings.decide_every:  # (the plan's steps played: decide)
+            low = self._low(info)
+            self._plan = self._search(info) if low else Plan()
+            self._step = 0 if low else self.settings.decide_every  # (none low: look next step)
+            if self._plan.aim is not None:
+                self.heuristic.aim = self._plan.aim
         scripted = int(self.heuristic(info))  # (its state moves on with every step it sees)
-        action, left = self._held
-        if left > 0:
-            self._held = (action, left - 1)
-            return action
-        if not self._low(info):
-            return scripted
-        action = self._search(scripted)
-        self._held = (action, self.settings.decide_every - 1)
-        return action
+        action, hold = self._plan.action, self._plan.hold
+        self._step += 1
+        return action if action >= 0 and self._step <= hold else scripted
 
     def _low(self, info: Mapping[str, Any]) -> bool:
         line = self.settings.low * self.table.height
@@ -118,27 +138,26 @@ class SearchPolicy:
             return bool((np.asarray(info["ball_positions"])[playing, 1] < line).any())
         return bool(info["ball_position"][1] < line)
 
-    def _search(self, scripted: int) -> int:
-        """The first action of the best branch from the game as it is."""
+    def _search(self, info: Mapping[str, Any]) -> Plan:
+        """The best plan from the game as it is (``info``: its last step's)."""
         self.decisions += 1
-        candidates = self.settings.candidates
-        n = len(candidates)
+        plans = self.settings.candidates
         state = self.game_env.clone_state()  # (its stream stays the game's)
         _, infos = self.branches.restore_state(state)
-        players = [self.heuristic.fork() for _ in range(n)]
+        players = [self.heuristic.fork() for _ in plans]
+        for player, plan in zip(players, plans, strict=True):
+            if plan.aim is not None:
+                player.aim = plan.aim
         start_score, start_balls = infos["score"][0], infos["balls_left"][0]
-        value = np.zeros(n)
-        live = np.ones(n, dtype=bool)
-        actions = np.zeros(n, dtype=np.int64)
+        value = np.zeros(len(plans))
+        live = np.ones(len(plans), dtype=bool)
+        actions = np.zeros(len(plans), dtype=np.int64)
         for step in range(self.settings.horizon):
-            for k, (action, hold) in enumerate(candidates):
-                if action >= 0 and step < hold:
-                    actions[k] = action
-                elif step == 0:
-                    actions[k] = scripted  # (this step's heuristic action is the one played)
-                else:
-                    info = {key: infos[key][k] for key in HEURISTIC_INFO if key in infos}
-                    actions[k] = int(players[k](info))
+            for k, plan in enumerate(plans):
+                seen = info if step == 0 else {key: infos[key][k] for key in HEURISTIC_INFO
+                                                if key in infos}  # fmt: skip
+                scripted = int(players[k](seen))  # (each copy sees its own branch)
+                actions[k] = plan.action if plan.action >= 0 and step < plan.hold else scripted
             _, _, terminated, truncated, infos = self.branches.step(actions)
             self.branch_steps += int(live.sum())
             gain = infos["score"] - start_score
@@ -147,6 +166,4 @@ class SearchPolicy:
             live &= ~(terminated | truncated)
             if not live.any():
                 break
-        best = int(np.argmax(value))  # (the first of equals: the heuristic's, candidate 0)
-        action, _ = candidates[best]
-        return scripted if action < 0 else action
+        return plans[int(np.argmax(value))]  # (the first of equals: the heuristic's, plan 0)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from pinball_env.players import HeuristicPolicy, SearchPolicy, SearchSettings
+from pinball_env.players.search import Plan
 
 SMALL = SearchSettings(horizon=6, holds=(2,))
 
@@ -16,6 +17,37 @@ def test_bad_settings_are_refused():
                          ({"low": 1.5}, "low"), ({"decide_every": 0}, "decide_every")):  # fmt: skip
         with pytest.raises(ValueError, match=message):
             SearchSettings(**bad)
+    for bad, message in (({"aims": (0.0,)}, "aims"), ({"aims": (1.2,)}, "aims"),
+                         ({"holds": (), "aims": ()}, "holds or aims")):  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            SearchSettings(**bad)
+
+
+def test_the_plans_are_the_heuristic_its_other_aims_and_each_action_held():
+    plans = SearchSettings(holds=(2, 8), aims=(0.3, 0.7)).candidates
+    assert plans[0] == Plan() and [p.aim for p in plans[1:3]] == [0.3, 0.7]
+    assert [(p.action, p.hold) for p in plans[3:]] == [(a, h) for h in (2, 8) for a in range(4)]
+    assert len(SearchSettings(holds=(), aims=(0.4,)).candidates) == 2
+
+
+def test_the_chosen_plan_plays_until_the_next_decision_and_its_aim_stays(monkeypatch):
+    # Every 4 steps (a ball always low) a plan is chosen: here both flippers held 2 steps, then
+    # the heuristic with aim 0.9, which stays the heuristic's aim until a new game.
+    env = gym.make("Pinball-v3")
+    player = SearchPolicy(env, SearchSettings(horizon=4, holds=(2,), decide_every=4))
+    monkeypatch.setattr(player, "_search", lambda info: Plan(3, 2, 0.9))
+    monkeypatch.setattr(player, "_low", lambda info: True)
+    heuristic = HeuristicPolicy(env.unwrapped.table)
+    heuristic.aim = 0.9
+    _, info = env.reset(seed=5)
+    for step in range(9):
+        action = player(info)
+        expected = int(heuristic(info))
+        assert action == (3 if step % 4 < 2 else expected), step
+        info = env.step(action)[4]
+    assert player.heuristic.aim == 0.9
+    player.reset()
+    assert player.heuristic.aim == HeuristicPolicy(env.unwrapped.table).aim
 
 
 @pytest.mark.parametrize("env_id", ["Pinball-v3", "Pinball-v0"])
@@ -68,7 +100,7 @@ def test_the_chosen_action_is_the_first_of_the_best_branch():
     scripted = player.heuristic.fork()
     chosen = player(info)
     values = []
-    for action, _ in settings.candidates:
+    for action, _, _ in settings.candidates:
         branch = gym.make("Pinball-v3")
         branch.reset(seed=0)
         _, start = branch.unwrapped.restore_state(state)
