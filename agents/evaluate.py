@@ -10,8 +10,10 @@ Each game is played to its end (the last ball drained, or the two-minute time li
 ``seed .. seed + episodes - 1`` (``--seed``, by default the config's ``eval_seed``, 100000). A
 model plays through the env chain it was trained on (frame skip, frame stacking, frozen
 ``VecNormalize`` statistics), choosing its actions deterministically; ``random`` (uniform over
-the actions, every frame) and ``heuristic`` (``pinball_env.players.HeuristicPolicy``) play
-frame by frame. Written to ``--out`` (default: ``RUN/eval`` for a run, ``evals/POLICY``):
+the actions, every frame), ``heuristic`` (``pinball_env.players.HeuristicPolicy``) and
+``search`` (the planner, ``pinball_env.players.VectorSearch``: a reference that looks ahead in
+the simulator, seconds a game) play frame by frame. Written to ``--out`` (default:
+``RUN/eval`` for a run, ``evals/POLICY``):
 
 - ``episodes.csv``: per game the seed, score, return (the env's reward, shaping included),
   length (frames), balls lost and whether the time limit truncated it;
@@ -64,7 +66,7 @@ from agents.report import curve_with_baselines
 
 # The functions of an evaluation, as agents.evaluate has always had them.
 from agents.report import report as report
-from agents.rollouts import BASELINES
+from agents.rollouts import POLICIES
 from agents.rollouts import model_policy as model_policy
 from agents.rollouts import rollouts as rollouts
 from agents.watch import record_video
@@ -83,7 +85,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         help="a run folder, a model or checkpoint zip, "
         "pretrained:NAME (an agent that ships), or an RLlib run or checkpoint folder",
     )
-    who.add_argument("--policy", choices=BASELINES, help="a baseline")
+    who.add_argument(
+        "--policy", choices=POLICIES, help="a baseline (search: the planner, a reference)"
+    )
     who.add_argument("--recording", type=Path, help="score a play-tool recording (a human's)")
     parser.add_argument("--protocol", action="store_true", help="the benchmark protocol's games")
     parser.add_argument(

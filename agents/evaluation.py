@@ -23,7 +23,7 @@ from agents.config import (
 )
 from agents.policy import PRETRAINED_PREFIX, resolve_model_path
 from agents.rollouts import (
-    BASELINES,
+    POLICIES,
     Player,
     baseline_player,
     play_games,
@@ -52,9 +52,9 @@ def player_for(
     ``table`` (default the env's), or on the env (and layouts) of the config ``like``; or the
     model saved at ``model_path`` (a run folder, a zip, ``pretrained:NAME``). One of the two."""
     if (policy is None) == (model_path is None):
-        raise ConfigError("give a model or a policy (random or heuristic), not both")
+        raise ConfigError("give a model or a policy (random, heuristic or search), not both")
     if policy is not None:
-        if policy in BASELINES and like is None:
+        if policy in POLICIES and like is None:
             kwargs = {"kwargs": {"table": table} if table else {}}
             like = config_from_dict({"env": {**kwargs, **({"id": env} if env else {})}})
         return baseline_player(policy, like)

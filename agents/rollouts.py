@@ -1,4 +1,5 @@
-"""Whole games, their summary, and who plays them: the baselines (``random``, ``heuristic``) and
+"""Whole games, their summary, and who plays them: the baselines (``random``, ``heuristic``; and
+``search``, the planner that looks ahead in the simulator: a reference, not a learner) and
 trained agents (loaded by ``agents.policy.load_policy``), each as a policy over a VecEnv of the
 env chain (``agents.envs.make_env_chain``)."""
 
@@ -14,9 +15,13 @@ import numpy as np
 from agents.config import AnyConfig, ConfigError, TrainConfig, config_from_dict
 from agents.envs import make_env_chain
 from agents.policy import ObsNormalization, Predictor, load_policy
-from pinball_env.players import HeuristicPolicy, RandomPolicy
+from pinball_env.players import HeuristicPolicy, RandomPolicy, VectorSearch
 
 BASELINES = ("random", "heuristic")
+# Players that use the simulator itself (a reference of how far play goes, not a learner), played
+# as a baseline is but never beside every run: the planner is slow.
+REFERENCES = ("search",)
+POLICIES = BASELINES + REFERENCES
 # The baselines play frame by frame, on the model's table (or layouts) with the default rewards.
 BASELINE_KWARGS = ("table", "balls", "num_layouts", "start_layout", "difficulty", "targets")
 
@@ -56,11 +61,14 @@ class HeuristicPlayers:
 
 
 def baseline_policy(name: str, venv: Any, seed: int) -> VecPolicy:
-    """``random`` or ``heuristic`` as a function of (observations, infos) -> actions."""
+    """``random``, ``heuristic`` or ``search`` as a function of (observations, infos) ->
+    actions."""
     n = venv.num_envs
     if name == "random":
         player = RandomPolicy(venv.action_space.n, seed)
         return lambda obs, infos: player(n)
+    if name == "search":
+        return search_policy(venv)
     players = HeuristicPlayers(venv.get_attr("game")[0].world)
 
     def heuristic(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
@@ -70,6 +78,24 @@ def baseline_policy(name: str, venv: Any, seed: int) -> VecPolicy:
         return actions
 
     return heuristic
+
+
+def search_policy(venv: Any) -> VecPolicy:
+    """The planner (``players.VectorSearch``, its default settings) over the native vector env
+    at the bottom of ``venv``; an env whose game ended plays no more (its player rests: the
+    rollouts keep only each env's first game)."""
+    native = venv
+    while not hasattr(native, "clone_state"):
+        native = native.venv
+    search = VectorSearch(native)
+    ended = np.zeros(venv.num_envs, dtype=bool)
+
+    def policy(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
+        ended[[env for env, info in enumerate(infos) if "episode" in info]] = True
+        return np.array([0 if ended[env] else search.players[env](info)
+                         for env, info in enumerate(infos)], dtype=np.int64)  # fmt: skip
+
+    return policy
 
 
 def model_policy(model: Any) -> VecPolicy:
@@ -94,8 +120,8 @@ class Player:
 
 def baseline_player(name: str, like: AnyConfig | None = None) -> Player:
     """A baseline, on the env, table (or layouts) and balls of ``like``."""
-    if name not in BASELINES:
-        raise ConfigError(f"unknown policy {name!r} (known: {', '.join(BASELINES)})")
+    if name not in POLICIES:
+        raise ConfigError(f"unknown policy {name!r} (known: {', '.join(POLICIES)})")
     return Player(name, baseline_config(name, like), None, partial(baseline_policy, name), False)
 
 

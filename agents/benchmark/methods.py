@@ -47,8 +47,14 @@ METHODS: dict[str, Method] = {
     "heuristic-v3": Method("Pinball-v3", baseline="heuristic"),
     "ppo-scale-v3": Method("Pinball-v3", "ppo_scale_v3.yaml", tiny=_TINY_PPO),
     "ppo-tuned-v3": Method("Pinball-v3", "ppo_tuned_v3.yaml", tiny=_TINY_PPO),
+    "ppo-tuned-v3-200m": Method(
+        "Pinball-v3", "ppo_tuned_v3.yaml", tiny=_TINY_PPO, frames=protocol.LONG_TRAINING_FRAMES
+    ),
+    # The planner (players.search): a reference that looks ahead in the simulator, not a learner.
+    "search-v3": Method("Pinball-v3", baseline="search"),
     "random-v2": Method("Pinball-v2", baseline="random"),
     "heuristic-v2": Method("Pinball-v2", baseline="heuristic"),
+    "search-v2": Method("Pinball-v2", baseline="search"),
     "ppo-scale-v2": Method("Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO),
     "ppo-scale-v2-200m": Method(
         "Pinball-v2", "ppo_scale_v2.yaml", tiny=_TINY_PPO, frames=protocol.LONG_TRAINING_FRAMES

@@ -54,6 +54,9 @@ def method_results(
             "score_mean": float(np.mean(scores)),
             "score_iqm": protocol.iqm(scores),
             **(_training(run, job) if method.trained else {}),
+            # Minutes its games took to play (the planner's are its compute).
+            **({"play_minutes": round(job["evaluate_seconds"] / 60.0, 1)}
+               if "evaluate_seconds" in job else {}),
         })  # fmt: skip
     if not runs:
         return None

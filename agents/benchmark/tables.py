@@ -5,6 +5,8 @@ from typing import Any
 
 import numpy as np
 
+from agents.rollouts import REFERENCES
+
 
 def markdown_table(methods: dict[str, Any]) -> str:
     """The table as Markdown (``benchmark.md``, the docs' results page): a row per method."""
@@ -24,6 +26,11 @@ def markdown_table(methods: dict[str, Any]) -> str:
             frames = np.mean([run["frames"] for run in runs]) / 1e6
             minutes = np.mean([run["train_minutes"] for run in runs])
             training = f"{frames:.1f}M frames, {minutes:.0f} min"
+        elif result.get("baseline") in REFERENCES:
+            seconds = [60.0 * run["play_minutes"] / len(run["scores"])
+                       for run in result["runs"] if "play_minutes" in run]  # fmt: skip
+            cost = f", {np.mean(seconds):.0f} s a game" if seconds else ""
+            training = f"none: looks ahead in the simulator{cost}"
         lines.append(f"| {name} | {result['env_id']} | {len(result['runs'])} | "
                      f"{' | '.join(cells)} | {training} |")  # fmt: skip
     return "\n".join(lines) + "\n"

@@ -6,12 +6,13 @@ agents (the ``heuristic`` baseline, the warm start's teacher).
   table with the cabinet, the skill shot and nudges for outlane balls.
 - :class:`RandomPolicy`: uniformly random actions (the protocol's lower reference).
 - :class:`SearchPolicy`: each action chosen by looking ahead in the simulator (saved games
-  branched into a vector env), the heuristic playing on in each branch: a reference above it.
+  branched into a vector env), the heuristic playing on in each branch: a reference above it;
+  :class:`VectorSearch` plays every game of a native vector env so.
 """
 
 from pinball_env.players.heuristic import HeuristicPolicy, plunger_pulls, skill_shot_frames
 from pinball_env.players.random import RandomPolicy
-from pinball_env.players.search import SearchPolicy, SearchSettings
+from pinball_env.players.search import SearchPolicy, SearchSettings, VectorSearch
 
-__all__ = ["HeuristicPolicy", "RandomPolicy", "SearchPolicy", "SearchSettings", "plunger_pulls",
-           "skill_shot_frames"]  # fmt: skip
+__all__ = ["HeuristicPolicy", "RandomPolicy", "SearchPolicy", "SearchSettings", "VectorSearch",
+           "plunger_pulls", "skill_shot_frames"]  # fmt: skip

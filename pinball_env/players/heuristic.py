@@ -305,6 +305,13 @@ class HeuristicPolicy:
         copy._held, copy._shoves = list(self._held), list(self._shoves)
         return copy
 
+    def starts_flip(self, info: Mapping[str, Any]) -> bool:
+        """Whether its action for ``info`` would send a resting flipper up (a flip begins),
+        asked without moving its state on (a planner's moment to choose: ``players.search``)."""
+        probe = self.fork()
+        probe(info)
+        return any(held == 0 < after for held, after in zip(self._held, probe._held, strict=True))
+
     def _flip(self, j: int, x: float, y: float, vx: float, vy: float) -> bool:
         """Whether a resting flipper ``j`` should flip now at the ball (x, y), (vx, vy)."""
         face = self._rest[j]

@@ -163,3 +163,28 @@ def test_the_learning_curve_names_the_table_the_env_plays():
     assert played_table(config_from_dict({"env": {"id": "Pinball-v3"}})) == "classic_v3"
     chosen = {"env": {"id": "Pinball-v0", "kwargs": {"table": "classic_v1"}}}
     assert played_table(config_from_dict(chosen)) == "classic_v1"
+
+
+def test_the_planner_plays_as_a_reference_and_each_game_as_alone(tmp_path):
+    """--policy search: each game of the evaluation's vector env is the game SearchPolicy plays
+    on its own env of the same seed (the same look-ahead), with the protocol's sticky actions."""
+    import gymnasium as gym
+
+    from pinball_env.players import SearchPolicy
+
+    summary = evaluate.main(
+        ["--policy", "search", "--env", "Pinball-v2", "--episodes", "2", "--protocol", "--out",
+         str(tmp_path / "s")]
+    )  # fmt: skip
+    with open(tmp_path / "s" / "episodes.csv") as file:
+        scores = [int(row["score"]) for row in csv.DictReader(file)]
+    alone = []
+    for seed in (100_000, 100_001):
+        env = gym.make("Pinball-v2", repeat_action_probability=0.25, max_frames=7200)
+        player, (_, info) = SearchPolicy(env), env.reset(seed=seed)
+        ended = False
+        while not ended:
+            _, _, terminated, truncated, info = env.step(player(info))
+            ended = terminated or truncated
+        alone.append(int(info["score"]))
+    assert scores == alone and summary["policy"] == "search"

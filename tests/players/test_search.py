@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from pinball_env.players import HeuristicPolicy, SearchPolicy, SearchSettings
+from pinball_env.players import HeuristicPolicy, SearchPolicy, SearchSettings, VectorSearch
 from pinball_env.players.search import Plan
 
 SMALL = SearchSettings(horizon=6, holds=(2,))
@@ -14,7 +14,8 @@ SMALL = SearchSettings(horizon=6, holds=(2,))
 
 def test_bad_settings_are_refused():
     for bad, message in (({"horizon": 0}, "horizon"), ({"holds": (9,), "horizon": 5}, "holds"),
-                         ({"low": 1.5}, "low"), ({"decide_every": 0}, "decide_every")):  # fmt: skip
+                         ({"low": 1.5}, "low"), ({"decide_every": 0}, "decide_every"),
+                         ({"decide": "often"}, "decide")):  # fmt: skip
         with pytest.raises(ValueError, match=message):
             SearchSettings(**bad)
     for bad, message in (({"aims": (0.0,)}, "aims"), ({"aims": (1.2,)}, "aims"),
@@ -34,7 +35,8 @@ def test_the_chosen_plan_plays_until_the_next_decision_and_its_aim_stays(monkeyp
     # Every 4 steps (a ball always low) a plan is chosen: here both flippers held 2 steps, then
     # the heuristic with aim 0.9, which stays the heuristic's aim until a new game.
     env = gym.make("Pinball-v3")
-    player = SearchPolicy(env, SearchSettings(horizon=4, holds=(2,), decide_every=4))
+    settings = SearchSettings(horizon=4, holds=(2,), decide="steps", decide_every=4)
+    player = SearchPolicy(env, settings)
     monkeypatch.setattr(player, "_search", lambda info: Plan(3, 2, 0.9))
     monkeypatch.setattr(player, "_low", lambda info: True)
     heuristic = HeuristicPolicy(env.unwrapped.table)
@@ -59,7 +61,7 @@ def test_the_look_ahead_leaves_the_game_and_its_stream_as_they_are(env_id):
     player = SearchPolicy(env, SMALL)
     _, info = env.reset(seed=100_000)
     replay.reset(seed=100_000)
-    for _ in range(400):
+    for _ in range(1500):
         stream = env.unwrapped.np_random.bit_generator.state
         action = player(info)
         assert env.unwrapped.np_random.bit_generator.state == stream
@@ -92,10 +94,11 @@ def test_the_chosen_action_is_the_first_of_the_best_branch():
     settings = SearchSettings(horizon=10, holds=(10,), drain_cost=1e6)
     player = SearchPolicy(env, settings)
     _, info = env.reset(seed=11)
-    for _ in range(3000):  # on to a ball falling towards the flippers
-        if player._low(info) and info["ball_velocity"][1] < -0.5:
+    for _ in range(3000):  # on to a flip: the first moment to choose
+        if player._low(info) and player.heuristic.starts_flip(info):
             break
         info = env.step(player(info))[4]
+    assert player.decisions == 0
     state = env.unwrapped.clone_state()
     scripted = player.heuristic.fork()
     chosen = player(info)
@@ -111,3 +114,70 @@ def test_the_chosen_action_is_the_first_of_the_best_branch():
                       - 1e6 * (start["balls_left"] - seen["balls_left"]))  # fmt: skip
     best = settings.candidates[int(np.argmax(values))][0]
     assert chosen == (int(scripted.fork()(info)) if best < 0 else best)
+    assert player.decisions == 1
+
+
+def test_it_decides_where_the_heuristic_begins_a_flip_and_only_there(monkeypatch):
+    # Deciding on flips: a decision at each step (a ball low) where the heuristic would send a
+    # resting flipper up, none elsewhere; the heuristic's own state is left as it was.
+    env = gym.make("Pinball-v3")
+    player = SearchPolicy(env, SearchSettings(horizon=2, holds=(1,)))
+    chosen: list[int] = []
+    monkeypatch.setattr(player, "_search", lambda info: chosen.append(step) or Plan())
+    heuristic = HeuristicPolicy(env.unwrapped.table)
+    _, info = env.reset(seed=7)
+    flips = []
+    for step in range(1500):
+        if player._low(info) and heuristic.starts_flip(info):
+            flips.append(step)
+        action = player(info)
+        assert action == heuristic(info)
+        info = env.step(action)[4]
+    assert len(flips) > 3 and chosen == flips
+
+
+def test_starts_flip_says_whether_a_resting_flipper_goes_up_and_changes_nothing():
+    env = gym.make("Pinball-v3")
+    heuristic = HeuristicPolicy(env.unwrapped.table)
+    _, info = env.reset(seed=7)
+    said = []
+    for _ in range(1500):
+        before = list(heuristic._held)
+        starts = heuristic.starts_flip(info)
+        assert heuristic._held == before
+        action = heuristic(info)
+        went_up = [was == 0 < now for was, now in zip(before, heuristic._held, strict=True)]
+        assert starts == any(went_up)
+        said.append(starts)
+        info = env.step(action)[4]
+    assert any(said) and not all(said)
+
+
+@pytest.mark.parametrize("env_id", ["Pinball-v3", "Pinball-v2"])
+def test_the_vector_search_plays_each_env_as_the_single_envs_planner(env_id):
+    # Each env of a native vector env, played by VectorSearch, gets the actions SearchPolicy
+    # chooses on a single env of the same seed: the same game, the same look-ahead.
+    seeds = [100_000, 100_001]
+    venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point",
+                        repeat_action_probability=0.25)  # fmt: skip
+    search = VectorSearch(venv, SMALL)
+    _, infos = venv.reset(seed=seeds)
+    singles = [gym.make(env_id, repeat_action_probability=0.25) for _ in seeds]
+    players = [SearchPolicy(env, SMALL) for env in singles]
+    single_infos = [env.reset(seed=seed)[1] for env, seed in zip(singles, seeds, strict=True)]
+    for _ in range(3000):
+        if search.planner.decisions >= 4:  # (a few decisions: enough)
+            break
+        actions = search([{key: value[env] for key, value in infos.items()} for env in range(2)])
+        assert actions.tolist() == [p(i) for p, i in zip(players, single_infos, strict=True)]
+        _, _, terminated, truncated, infos = venv.step(actions)
+        single_infos = [env.step(int(a))[4] for env, a in zip(singles, actions, strict=True)]
+        assert not (terminated | truncated).any()
+    assert search.planner.decisions == sum(p.decisions for p in players) > 0
+    search.close()
+
+
+def test_the_vector_search_refuses_generated_tables():
+    venv = gym.make_vec("PinballProcgen-v0", num_envs=1, vectorization_mode="vector_entry_point")
+    with pytest.raises(ValueError, match="fixed table"):
+        VectorSearch(venv)
