@@ -213,13 +213,13 @@ def load_config(
     one, with ``key=value`` overrides applied, checked (``check=False``: its keys only, for
     reading what it says where its libraries are not installed: the docs' table of configs)."""
     path = Path(path)
-    data = _read_config_data(path)
+    data = read_config_data(path)
     for item in overrides:
         apply_override(data, item, path)
     return config_from_dict(data, str(path), kind, check)
 
 
-def _read_config_data(path: Path, inside: tuple[Path, ...] = ()) -> dict[str, Any]:
+def read_config_data(path: Path, inside: tuple[Path, ...] = ()) -> dict[str, Any]:
     """The mapping in the YAML file ``path`` laid over the config its ``base`` key names (a path
     from ``path``'s folder), and so on down: a mapping merges key by key, any other value
     replaces the base's. ``inside``: the files that named this one as their base."""
@@ -243,7 +243,7 @@ def _read_config_data(path: Path, inside: tuple[Path, ...] = ()) -> dict[str, An
     if base_path.resolve() in chain:
         files = " -> ".join(str(file) for file in (*chain, base_path.resolve()))
         raise ConfigError(f"{path}: base: {base} makes a cycle ({files})")
-    return _merged(_read_config_data(base_path, chain), data)
+    return _merged(read_config_data(base_path, chain), data)
 
 
 def _merged(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
@@ -301,8 +301,8 @@ def config_from_dict(
         raise ConfigError(f"{source}: a stable-baselines3 config (it has a policy): train it "
                           "with python -m agents.train")  # fmt: skip
     _rename_keys(data, source)
-    _check_keys(data, kind, source, "")
-    _check_keys(env_data, EnvConfig, source, "env.")
+    check_keys(data, kind, source, "")
+    check_keys(env_data, EnvConfig, source, "env.")
     config = kind(**data, env=EnvConfig(**env_data))
     if check:
         check_config(config, source)
@@ -319,12 +319,12 @@ def _rename_keys(data: dict[str, Any], source: str) -> None:
             data[new] = data.pop(old)
 
 
-def _check_keys(data: dict[str, Any], cls: type, source: str, prefix: str) -> None:
+def check_keys(data: dict[str, Any], cls: type, source: str, prefix: str) -> None:
     known = {f.name for f in dataclasses.fields(cls)} - {"env"}
     for key in data:
         if key not in known:
             raise ConfigError(
-                f"{source}: unknown key {prefix}{key!r} (known: {', '.join(sorted(known))})"
+                f"{source}: unknown key '{prefix}{key}' (known: {', '.join(sorted(known))})"
             )
 
 

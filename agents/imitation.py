@@ -88,7 +88,6 @@ def imitate(
     to them (see the module's docstring), at ``learning_rate`` (None: the rate its optimizer
     has); returns the fit's figures. Once ``stop`` (a ``StopRequest``) is true, the games and
     the fit end early: the model keeps what it fitted."""
-    import torch
 
     start = time.monotonic()
     games = teacher_games(venv, max(1, steps // venv.num_envs), stop)
@@ -100,27 +99,47 @@ def imitate(
         rewards = venv.normalize_reward(rewards)
     returns = discounted_returns(rewards, games["dones"], model.gamma).reshape(-1)
     actions = games["actions"].reshape(-1)
-    policy = model.policy
+    fitted = fit_policy(model.policy, obs, actions, epochs, seed, returns=returns,
+                        vf_coef=getattr(model, "vf_coef", 0.5), learning_rate=learning_rate,
+                        stop=stop)  # fmt: skip
+    return {"steps": len(actions), "frames": games["frames"], **fitted,
+            "seconds": time.monotonic() - start}  # fmt: skip
+
+
+def fit_policy(
+    policy: Any, obs: np.ndarray, actions: np.ndarray, epochs: int, seed: int,
+    returns: np.ndarray | None = None, vf_coef: float = 0.5, learning_rate: float | None = None,
+    stop: Any = False, batch_size: int = BATCH_SIZE,
+) -> dict[str, float]:  # fmt: skip
+    """Fit an actor-critic ``policy`` (stable-baselines3's) to a teacher: its actions to
+    ``actions`` (cross-entropy) and, given ``returns``, its value to them (mean squared error,
+    weighed by ``vf_coef``) in ``epochs`` passes over (``obs``, already normalised as the
+    policy sees them) in shuffled minibatches, with its own optimizer (at ``learning_rate``
+    meanwhile; None: its rate). Returns the fit's accuracy (and value loss) after it."""
+    import torch
+
     policy.set_training_mode(True)
     device = policy.device
     obs_t = torch.as_tensor(obs, dtype=torch.float32, device=device)
     actions_t = torch.as_tensor(actions, device=device)
-    returns_t = torch.as_tensor(returns, dtype=torch.float32, device=device)
+    returns_t = None if returns is None else torch.as_tensor(returns, dtype=torch.float32,
+                                                             device=device)  # fmt: skip
     rng = np.random.default_rng(seed)
-    vf_coef = getattr(model, "vf_coef", 0.5)
     rates = [group["lr"] for group in policy.optimizer.param_groups]
     if learning_rate is not None:  # (the algorithm sets its own rate again as it learns)
         for group in policy.optimizer.param_groups:
             group["lr"] = learning_rate
     for _ in range(epochs):
         order = rng.permutation(len(actions))
-        for first in range(0, len(order), BATCH_SIZE):
+        for first in range(0, len(order), batch_size):
             if stop:
                 break
-            batch = torch.as_tensor(order[first : first + BATCH_SIZE], device=device)
+            batch = torch.as_tensor(order[first : first + batch_size], device=device)
             values, log_prob, _ = policy.evaluate_actions(obs_t[batch], actions_t[batch])
-            value_loss = torch.nn.functional.mse_loss(values.flatten(), returns_t[batch])
-            loss = -log_prob.mean() + vf_coef * value_loss
+            loss = -log_prob.mean()
+            if returns_t is not None:
+                loss = loss + vf_coef * torch.nn.functional.mse_loss(values.flatten(),
+                                                                     returns_t[batch])  # fmt: skip
             policy.optimizer.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(policy.parameters(), 0.5)
@@ -130,14 +149,11 @@ def imitate(
     policy.set_training_mode(False)
     with torch.no_grad():
         chosen = policy.get_distribution(obs_t).distribution.probs.argmax(dim=1)
-        values = policy.predict_values(obs_t).flatten()
-    return {
-        "steps": len(actions),
-        "frames": games["frames"],
-        "accuracy": float((chosen == actions_t).float().mean()),
-        "value_loss": float(torch.mean((values - returns_t) ** 2)),
-        "seconds": time.monotonic() - start,
-    }
+        fitted = {"accuracy": float((chosen == actions_t).float().mean())}
+        if returns_t is not None:
+            values = policy.predict_values(obs_t).flatten()
+            fitted["value_loss"] = float(torch.mean((values - returns_t) ** 2))
+    return fitted
 
 
 class KLAnchor:

@@ -260,6 +260,7 @@ class HeuristicPolicy:
         # Holding a caught ball longer than this [frames] is not a catch but a stall.
         self._max_hold = round(3.0 * table.simulation.frame_rate)
         self._held = [0] * len(table.flippers)  # frames each flipper's button has been held
+        self._before = list(self._held)  # (as they were before its last answer)
         # The cabinet's buttons (plunger, nudges), on a table with one.
         self.cabinet = table.has_cabinet
         self.plunge = plunge and self.cabinet
@@ -295,6 +296,7 @@ class HeuristicPolicy:
     def reset(self) -> None:
         """Forget the last game: every flipper down, no nudges given."""
         self._held = [0] * len(self._held)
+        self._before = list(self._held)
         self._shoves = []
 
     def fork(self) -> "HeuristicPolicy":
@@ -303,7 +305,15 @@ class HeuristicPolicy:
         copy = object.__new__(HeuristicPolicy)
         copy.__dict__.update(self.__dict__)
         copy._held, copy._shoves = list(self._held), list(self._shoves)
+        copy._before = list(self._before)
         return copy
+
+    def played(self, action: int) -> None:
+        """The game played the discrete ``action``, not its last answer (a learner's, whose
+        states it labels: ``agents.distill``): its flippers' held counts follow the flipper
+        buttons ``action`` held. (Its record of its own nudges stays its own.)"""
+        for j, button in enumerate(self._buttons):
+            self._held[j] = self._before[j] + 1 if int(action) >> button & 1 else 0
 
     def starts_flip(self, info: Mapping[str, Any]) -> bool:
         """Whether its action for ``info`` would send a resting flipper up (a flip begins),
@@ -349,6 +359,7 @@ class HeuristicPolicy:
                  for p, v in zip(position.reshape(-1, 2), velocity.reshape(-1, 2),
                                  strict=True)]  # fmt: skip
         pressed = np.zeros(len(BUTTONS), dtype=bool)
+        self._before = list(self._held)
         for j, held in enumerate(self._held):
             if held == 0:
                 up = any(self._flip(j, *ball) for ball in balls)

@@ -188,6 +188,11 @@ class SearchPlayer:
         self._played, self._left = step + 1, self._left - 1
         return plan.action if plan.action >= 0 and step < plan.hold else scripted
 
+    def played(self, action: int) -> None:
+        """The game played ``action``, not its last answer (a learner's: ``agents.distill``):
+        its heuristic's flippers follow it; a plan being played goes on."""
+        self.heuristic.played(action)
+
     def _decides(self, info: Mapping[str, Any]) -> bool:
         """A moment to choose: a ball is low (and, deciding on flips, a flip begins)."""
         if not self._low(info):

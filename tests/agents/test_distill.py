@@ -1,0 +1,66 @@
+"""The planner distilled into a policy (agents.distill): its config's checks, and a tiny
+DAgger run whose model loads as any trained agent's and whose rows say what it did."""
+
+import csv
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from agents import distill
+from agents.config import ConfigError, load_run_config
+from agents.policy import load_policy
+from pinball_env.players import HeuristicPolicy
+
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "agents" / "distill_search_v3.yaml"
+TINY = ["iterations=2", "env.num_envs=2", "validate_episodes=2", "epochs=1",
+        "teacher={horizon: 4, holds: [1]}", "env.kwargs.max_frames=600"]  # fmt: skip
+
+
+def test_bad_configs_are_refused_with_the_key_that_is_wrong():
+    for override, message in (("iterations=0", "iterations"),
+                              ("colour=red", "unknown key 'colour'"),
+                              ("teacher={horizon: 0}", "teacher: horizon"),
+                              ("env.speed=2", "unknown key 'env.speed'"),
+                              ("learning_rate=-1", "learning_rate"),
+                              ("seed=10", "reach the validation or evaluation games"),
+                              ("iterations=700", "another seed's")):  # fmt: skip
+        with pytest.raises(ConfigError, match=message):
+            distill.load_distill_config(CONFIG, [override])
+    assert distill.load_distill_config(CONFIG).learner().algo == "ppo"
+
+
+def test_a_tiny_distillation_labels_fits_validates_and_saves_a_loadable_policy(tmp_path):
+    config = distill.load_distill_config(CONFIG, TINY)
+    run = distill.distill(config, tmp_path, ["test"])
+    with open(run / distill.ITERATIONS_FILE) as file:
+        rows = list(csv.DictReader(file))
+    assert [row["player"] for row in rows] == ["teacher", "learner"]
+    assert float(rows[0]["agreement"]) == 1.0 and 0.0 <= float(rows[1]["agreement"]) <= 1.0
+    # The data set aggregates: the second fit saw both iterations' steps.
+    assert int(rows[1]["data"]) == int(rows[0]["steps"]) + int(rows[1]["steps"])
+    assert int(rows[0]["steps"]) == 2 * 600  # (two games of 600 frames, every frame labelled)
+    assert load_run_config(run).env.id == "Pinball-v3"
+    assert distill.load_distill_config(run / distill.DISTILL_FILE) == config
+    policy = load_policy(run)
+    env = gym.make("Pinball-v3", max_frames=600, ball_order="lowest")
+    obs, _ = env.reset(seed=300_000)
+    assert policy.act(policy.normalization(obs[None]))[0] in range(env.action_space.n)
+
+
+def test_the_heuristic_follows_the_flippers_another_player_pressed():
+    # After played(action), each flipper's held count is the steps its button has been held
+    # in a row by the actions played, whatever the heuristic itself answered.
+    env = gym.make("Pinball-v3")
+    heuristic = HeuristicPolicy(env.unwrapped.table)
+    _, info = env.reset(seed=4)
+    rng = np.random.default_rng(0)
+    in_a_row = [0, 0]
+    for _ in range(400):
+        heuristic(info)
+        played = int(rng.integers(4))
+        heuristic.played(played)
+        in_a_row = [count + 1 if played >> j & 1 else 0 for j, count in enumerate(in_a_row)]
+        assert heuristic._held == in_a_row
+        info = env.step(played)[4]
