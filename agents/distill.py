@@ -1,6 +1,6 @@
 """A policy distilled from the planner (DAgger): the learner plays, the planner labels.
 
-    python -m agents.distill --config configs/agents/distill_search_v3.yaml [key=value ...]
+    python -m agents.distill --config configs/distill/search_v3.yaml [key=value ...]
         [--runs runs]
 
 The teacher is ``pinball_env.players.VectorSearch`` (the planner, its ``teacher`` settings),

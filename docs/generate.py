@@ -50,6 +50,7 @@ MARKER = re.compile(
 )
 BENCHMARK = ROOT / "docs" / "benchmark.json"
 CONFIGS = ROOT / "configs" / "agents"
+DISTILL_CONFIGS = ROOT / "configs" / "distill"
 PRETRAINED = ROOT / "agents" / "pretrained"
 
 
@@ -227,6 +228,7 @@ def configs(_: str = "") -> str:
     methods that train it, and what it trains on."""
     from agents.benchmark.methods import METHODS
     from agents.config import RllibConfig, TrainConfig, load_config
+    from agents.distill import load_distill_config
 
     rows = []
     for path in sorted(CONFIGS.glob("*.yaml")):
@@ -241,6 +243,12 @@ def configs(_: str = "") -> str:
         methods = ", ".join(name for name, m in METHODS.items() if m.config == path.name) or "-"
         rows.append((f"`{path.name}`", algorithm, f"`{config.env.id}`", budget, methods,
                      _training(config, rllib)))  # fmt: skip
+    for path in sorted(DISTILL_CONFIGS.glob("*.yaml")):  # (agents.distill's)
+        distilled = load_distill_config(path)
+        budget = f"{distilled.iterations} x {distilled.env.num_envs} games"
+        methods = ", ".join(name for name, m in METHODS.items() if m.config == path.name) or "-"
+        rows.append((f"`distill/{path.name}`", "DAgger from the planner", f"`{distilled.env.id}`",
+                     budget, methods, _training(distilled.learner(), False)))  # fmt: skip
     return _table(("config", "algorithm", "env", "budget", "benchmark methods", "trains on"), rows)
 
 

@@ -120,7 +120,7 @@ def test_importing_the_package_loads_no_agent_library_and_no_tool():
 
 AGENTS = Path(__file__).resolve().parent.parent / "agents"
 # The commands on top of agents/: nothing below them imports them.
-AGENT_COMMANDS = {"train", "rllib", "evaluate", "generalization", "benchmark"}
+AGENT_COMMANDS = {"train", "rllib", "distill", "evaluate", "generalization", "benchmark"}
 
 
 def agent_imports(path: Path) -> set[str]:

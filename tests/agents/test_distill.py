@@ -13,7 +13,7 @@ from agents.config import ConfigError, load_run_config
 from agents.policy import load_policy
 from pinball_env.players import HeuristicPolicy
 
-CONFIG = Path(__file__).resolve().parents[2] / "configs" / "agents" / "distill_search_v3.yaml"
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "distill" / "search_v3.yaml"
 TINY = ["iterations=2", "env.num_envs=2", "validate_episodes=2", "epochs=1",
         "teacher={horizon: 4, holds: [1]}", "env.kwargs.max_frames=600"]  # fmt: skip
 

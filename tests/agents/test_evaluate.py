@@ -144,7 +144,7 @@ def test_watch_without_a_display_stops_at_once_and_points_to_the_browser(monkeyp
      ("pinball_env.tools.demo", None), ("pinball_env.tools.tilt", None),
      ("pinball_env.tools.crosscheck", "pinball_env.tools.crosscheck.cli"),
      ("benchmarks.speed", None), ("benchmarks.first_compile", None),
-     ("benchmarks.promises", None)],
+     ("benchmarks.promises", None), ("agents.distill", None), ("benchmarks.planner", None)],
 )  # fmt: skip
 def test_help_names_the_command_and_reads_as_plain_text(module, entry, capsys):
     import importlib
