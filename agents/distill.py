@@ -73,6 +73,10 @@ class DistillConfig:
     """Passes over the data set at each fit."""
     learning_rate: float = 1e-3
     batch_size: int = 1024
+    balance: float = 0.0
+    """How far the fit evens out the actions' shares: each step's cross-entropy weighed by
+    (its action's share of the labels) to the power ``-balance``: 0, plain; 1, every action
+    weighs as much in all (a flip, a few frames a shot, as much as the many frames of none)."""
     net_arch: list[int] = field(default_factory=lambda: [128, 128])
     """The policy network's hidden layers."""
     teacher: dict[str, Any] = field(default_factory=dict)
@@ -111,6 +115,8 @@ class DistillConfig:
         if last > min(EVAL_SEEDS.start, self.validate_seed) or last > SEED_STRIDE * (self.seed + 1):
             fail(f"seed {self.seed} x {self.iterations} iterations of {self.env.num_envs} games "
                  "reach the validation or evaluation games, or another seed's")  # fmt: skip
+        if not (isinstance(self.balance, int | float) and 0.0 <= self.balance <= 1.0):
+            fail(f"balance: must be from 0 to 1, got {self.balance!r}")
         if not (isinstance(self.learning_rate, int | float) and self.learning_rate > 0):
             fail(f"learning_rate: must be > 0, got {self.learning_rate!r}")
         try:
@@ -207,9 +213,11 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
         data_labels.append(games["labels"])
         obs = np.concatenate(data_obs)
         normalize = getattr(venv, "normalize_obs", None)
-        fitted = fit_policy(model.policy, normalize(obs) if normalize else obs,
-                            np.concatenate(data_labels), config.epochs, config.seed + k,
-                            batch_size=config.batch_size)  # fmt: skip
+        labels = np.concatenate(data_labels)
+        fitted = fit_policy(model.policy, normalize(obs) if normalize else obs, labels,
+                            config.epochs, config.seed + k, batch_size=config.batch_size,
+                            class_weights=class_weights(labels, venv.action_space.n,
+                                                        config.balance))  # fmt: skip
         frames += games["steps"] * learner.env.frame_skip
         model.num_timesteps += games["steps"]
         save_model(model, run / CHECKPOINTS, f"iteration_{k}", learner)
@@ -229,6 +237,18 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
     search.close()
     venv.close()
     return run
+
+
+def class_weights(labels: np.ndarray, actions: int, balance: float) -> np.ndarray | None:
+    """Each action's weight in the fit: its share of ``labels`` to the power ``-balance``
+    (None for 0: plain cross-entropy); an action never labelled weighs nothing."""
+    if balance == 0.0:
+        return None
+    counts = np.bincount(labels, minlength=actions).astype(np.float64)
+    shares = counts / counts.sum()
+    weights = np.zeros(actions)
+    weights[counts > 0] = shares[counts > 0] ** -balance
+    return weights
 
 
 def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:

@@ -109,13 +109,15 @@ def imitate(
 def fit_policy(
     policy: Any, obs: np.ndarray, actions: np.ndarray, epochs: int, seed: int,
     returns: np.ndarray | None = None, vf_coef: float = 0.5, learning_rate: float | None = None,
-    stop: Any = False, batch_size: int = BATCH_SIZE,
+    stop: Any = False, batch_size: int = BATCH_SIZE, class_weights: np.ndarray | None = None,
 ) -> dict[str, float]:  # fmt: skip
     """Fit an actor-critic ``policy`` (stable-baselines3's) to a teacher: its actions to
     ``actions`` (cross-entropy) and, given ``returns``, its value to them (mean squared error,
     weighed by ``vf_coef``) in ``epochs`` passes over (``obs``, already normalised as the
     policy sees them) in shuffled minibatches, with its own optimizer (at ``learning_rate``
-    meanwhile; None: its rate). Returns the fit's accuracy (and value loss) after it."""
+    meanwhile; None: its rate); with ``class_weights`` (one per action), each step's
+    cross-entropy weighed by its action's. Returns the fit's accuracy (and value loss) after
+    it."""
     import torch
 
     policy.set_training_mode(True)
@@ -124,6 +126,11 @@ def fit_policy(
     actions_t = torch.as_tensor(actions, device=device)
     returns_t = None if returns is None else torch.as_tensor(returns, dtype=torch.float32,
                                                              device=device)  # fmt: skip
+    weights_t = (
+        None
+        if class_weights is None
+        else torch.as_tensor(class_weights, dtype=torch.float32, device=device)
+    )
     rng = np.random.default_rng(seed)
     rates = [group["lr"] for group in policy.optimizer.param_groups]
     if learning_rate is not None:  # (the algorithm sets its own rate again as it learns)
@@ -136,7 +143,11 @@ def fit_policy(
                 break
             batch = torch.as_tensor(order[first : first + batch_size], device=device)
             values, log_prob, _ = policy.evaluate_actions(obs_t[batch], actions_t[batch])
-            loss = -log_prob.mean()
+            if weights_t is None:
+                loss = -log_prob.mean()
+            else:
+                weight = weights_t[actions_t[batch]]
+                loss = -(weight * log_prob).sum() / weight.sum()
             if returns_t is not None:
                 loss = loss + vf_coef * torch.nn.functional.mse_loss(values.flatten(),
                                                                      returns_t[batch])  # fmt: skip

@@ -1,15 +1,16 @@
 """The planner's score against its compute: the protocol's first held-out games (sticky actions,
 the protocol's game) played by ``players.VectorSearch`` at each setting of a ladder of
 look-ahead budgets, with the heuristic on the same games beside them. The figures behind the
-saving page's table and figure (``docs/saving.md``).
+planner page's table and figure (``docs/planner.md``).
 
     python -m benchmarks.planner [--env Pinball-v3] [--games 30] [--ladder h15 h45 ...]
                                  [--json FILE] [--figure PNG]
+    python -m benchmarks.planner --replot docs/planner.json --figure docs/planner.png
 
-Each setting is named by its horizon and plans (``h120a``: a horizon of 120 steps, the
-default plans and two other aims); its compute is the branch steps a game takes (branches x
-horizon x decisions), and its seconds a game on this machine (one core: decisions are taken
-one after another).
+Each setting is named by its horizon and plans (``h120a``: a horizon of 120 steps, the held
+flipper actions and two other aims: the planner's defaults; ``h120``: without the aims); its
+compute is the branch steps a game takes (branches x horizon x decisions), and its seconds a
+game on this machine (one core: decisions are taken one after another).
 """
 
 import dataclasses
@@ -26,11 +27,12 @@ from pinball_env import protocol
 from pinball_env.players import HeuristicPolicy, SearchSettings, VectorSearch
 from pinball_env.tools import command_parser
 
-# The ladder: each setting's name and its SearchSettings' fields (the rest its defaults).
+# The ladder: each setting's name and its SearchSettings' fields (the rest its defaults): the
+# horizon in steps, and "a" for the two other aims of the default plans (none without).
 SETTINGS: dict[str, dict[str, Any]] = {
-    "h15": {"horizon": 15},
-    "h45": {"horizon": 45},
-    "h120": {"horizon": 120},
+    "h15": {"horizon": 15, "aims": ()},
+    "h45": {"horizon": 45, "aims": ()},
+    "h120": {"horizon": 120, "aims": ()},
     "h120a": {"horizon": 120, "aims": (0.3, 0.7)},
     "h240a": {"horizon": 240, "aims": (0.3, 0.7)},
 }
@@ -109,7 +111,9 @@ def figure(result: dict[str, Any], path: Path) -> None:
     ax.errorbar(x, y, yerr=[low, high], marker="o", capsize=3, label="planner")
     for name, xi, yi in zip(ladder, x, y, strict=True):
         ax.annotate(name, (xi, yi), textcoords="offset points", xytext=(4, -12), fontsize=8)
-    ax.axhline(result["heuristic"]["normalized_iqm"], color="grey", ls="--", label="heuristic")
+    scripted = result["heuristic"]["normalized_iqm"]
+    ax.axhline(scripted, color="grey", ls="--", label="heuristic")
+    ax.axhline(2 * scripted, color="grey", ls=":", label="twice the heuristic")
     ax.set_xscale("log")
     ax.set_xlabel("look-ahead: branch steps a game")
     ax.set_ylabel("normalised IQM")
@@ -129,7 +133,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                         metavar="SETTING", help=f"settings: {', '.join(SETTINGS)}")  # fmt: skip
     parser.add_argument("--json", type=Path, help="write the results here")
     parser.add_argument("--figure", type=Path, help="draw the figure here (PNG)")
+    parser.add_argument(
+        "--replot", type=Path, metavar="JSON", help="draw --figure from an earlier run's JSON"
+    )
     args = parser.parse_args(argv)
+    if args.replot:
+        if not args.figure:
+            parser.error("--replot draws a --figure: give one")
+        result = json.loads(args.replot.read_text())
+        figure(result, args.figure)
+        return result
     if not 1 <= args.games <= len(protocol.EVAL_SEEDS):
         parser.error(f"--games must be 1 to {len(protocol.EVAL_SEEDS)}")
     scripted = heuristic(args.env, args.games)

@@ -61,11 +61,11 @@ class Plan(NamedTuple):
 class SearchSettings:
     """The planner's compute and scoring (module docstring)."""
 
-    horizon: int = 45
+    horizon: int = 120
     """Steps each branch plays on (at frame skip 1, 60 steps are a second)."""
     holds: tuple[int, ...] = (2, 8)
     """Steps a plan holds its flipper action before the heuristic plays on."""
-    aims: tuple[float, ...] = ()
+    aims: tuple[float, ...] = (0.3, 0.7)
     """The heuristic's other aims a plan may take (shares of a flipper's length)."""
     decide: str = "flips"
     """When it decides, while a ball is low: ``flips``, when the heuristic would begin a flip

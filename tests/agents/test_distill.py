@@ -24,6 +24,7 @@ def test_bad_configs_are_refused_with_the_key_that_is_wrong():
                               ("teacher={horizon: 0}", "teacher: horizon"),
                               ("env.speed=2", "unknown key 'env.speed'"),
                               ("learning_rate=-1", "learning_rate"),
+                              ("balance=1.5", "balance"),
                               ("seed=10", "reach the validation or evaluation games"),
                               ("iterations=700", "another seed's")):  # fmt: skip
         with pytest.raises(ConfigError, match=message):
@@ -64,3 +65,15 @@ def test_the_heuristic_follows_the_flippers_another_player_pressed():
         in_a_row = [count + 1 if played >> j & 1 else 0 for j, count in enumerate(in_a_row)]
         assert heuristic._held == in_a_row
         info = env.step(played)[4]
+
+
+def test_the_class_weights_even_out_the_actions_shares():
+    labels = np.array([0] * 90 + [1] * 9 + [3])
+    assert distill.class_weights(labels, 4, 0.0) is None
+    weights = distill.class_weights(labels, 4, 1.0)
+    counts = np.bincount(labels, minlength=4)
+    # Fully balanced: every labelled action weighs as much in all; one never labelled, nothing.
+    totals = weights * counts
+    assert np.allclose(totals[counts > 0], totals[0]) and weights[2] == 0.0
+    half = distill.class_weights(labels, 4, 0.5)
+    assert np.allclose(half[[0, 1, 3]], np.sqrt(weights[[0, 1, 3]]))

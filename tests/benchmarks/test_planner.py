@@ -16,7 +16,9 @@ def test_it_plays_the_protocols_games_and_writes_its_figures(tmp_path):
     published = json.loads(PUBLISHED.read_text())["methods"]["heuristic-v3"]["runs"][0]
     assert result["heuristic"]["scores"] == published["scores"][:2]
     row = result["ladder"]["h15"]
-    assert len(row["scores"]) == 2 and row["settings"]["horizon"] == 15
+    assert (
+        len(row["scores"]) == 2 and row["settings"]["horizon"] == 15 and not row["settings"]["aims"]
+    )
     assert row["branch_steps_per_game"] > 0 and row["decisions_per_game"] > 0
     assert json.loads((tmp_path / "p.json").read_text())["ladder"]["h15"]["scores"] == row["scores"]
     assert (tmp_path / "p.png").stat().st_size > 0
