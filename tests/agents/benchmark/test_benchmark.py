@@ -410,3 +410,8 @@ def test_a_key_added_later_leaves_the_digest_of_configs_at_its_default():
     assert "anchor_coef" not in methods.trained_by(config)
     assert "kl_anchor_coef" not in methods.trained_by(config)
     assert methods.config_digest(anchored) != methods.config_digest(config)
+
+
+def test_the_benchmark_page_names_every_method():
+    page = (PUBLISHED.parent / "benchmark.md").read_text()
+    assert [name for name in methods.METHODS if f"`{name}`" not in page] == []
