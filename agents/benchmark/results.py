@@ -54,8 +54,8 @@ def method_results(
             "score_mean": float(np.mean(scores)),
             "score_iqm": protocol.iqm(scores),
             **(_training(run, job) if method.trained else {}),
-            # Minutes its games took to play (the planner's are its compute).
-            **({"play_minutes": round(job["evaluate_seconds"] / 60.0, 1)}
+            # Seconds its games took to play (the planner's are its compute).
+            **({"play_seconds": round(job["evaluate_seconds"], 1)}
                if "evaluate_seconds" in job else {}),
         })  # fmt: skip
     if not runs:

@@ -27,8 +27,8 @@ def markdown_table(methods: dict[str, Any]) -> str:
             minutes = np.mean([run["train_minutes"] for run in runs])
             training = f"{frames:.1f}M frames, {minutes:.0f} min"
         elif result.get("baseline") in REFERENCES:
-            seconds = [60.0 * run["play_minutes"] / len(run["scores"])
-                       for run in result["runs"] if "play_minutes" in run]  # fmt: skip
+            seconds = [run["play_seconds"] / len(run["scores"])
+                       for run in result["runs"] if "play_seconds" in run]  # fmt: skip
             cost = f", {np.mean(seconds):.0f} s a game" if seconds else ""
             training = f"none: looks ahead in the simulator{cost}"
         lines.append(f"| {name} | {result['env_id']} | {len(result['runs'])} | "

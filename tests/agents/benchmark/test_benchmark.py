@@ -415,3 +415,15 @@ def test_a_key_added_later_leaves_the_digest_of_configs_at_its_default():
 def test_the_benchmark_page_names_every_method():
     page = (PUBLISHED.parent / "benchmark.md").read_text()
     assert [name for name in methods.METHODS if f"`{name}`" not in page] == []
+
+
+def test_the_planner_is_a_reference_row_with_its_seconds_a_game(tmp_path):
+    table = cli.main(["--tiny", "--out", str(tmp_path), "--methods", "search-v2",
+                      "--episodes", "1"])  # fmt: skip
+    result = table["methods"]["search-v2"]
+    assert result["baseline"] == "search" and result["training_frames"] is None
+    (run,) = result["runs"]
+    assert len(run["scores"]) == 1 and run["play_seconds"] > 0
+    row = (tmp_path / "benchmark.md").read_text().splitlines()[-1]
+    assert row.startswith("| search-v2 |") and "none: looks ahead in the simulator" in row
+    assert row.rstrip(" |").endswith("s a game")
