@@ -2,24 +2,25 @@
 :class:`VectorSearch` (every env of a native vector env), both a :class:`SearchPlayer` per game
 over a :class:`Planner`.
 
-It decides at the moments a choice matters: by default (``decide="flips"``) where the
-scripted heuristic would begin a flip with a ball low, so about once a shot (with
-``decide="steps"``, at every step while a ball is low). To decide, it saves the game it plays
-(``clone_state``, without the env's random stream: the look-ahead does not see the draws to
-come, of the sticky actions or the launches), branches it into a small native vector env, one
-env per candidate plan, and plays every branch ``horizon`` steps on. A plan is the scripted
-heuristic (``HeuristicPolicy``, each branch its own copy as it is now) with, first, one
-flipper action (none, left, right, both) held for ``hold`` steps, or with another ``aim``
-(where on a flipper it shoots a ball rolling down it, a share of the flipper's length); one
-plan is the heuristic as it is. Each branch is scored by the points it made, less
-``drain_cost`` for each ball it lost, and the best plan (ties go to the heuristic's, then to
-the order of the plans) plays as it played in its branch for its hold, at least
-``decide_every`` steps, before the next decision may come; a chosen aim stays the heuristic's
-until another is chosen. The look-ahead plays without sticky actions (a planner cannot know
-the draws); the game it chooses for plays under whatever the env has (the benchmark
-protocol's sticky actions act on the actions it plays). While no ball in play is below
-``low`` (a share of the table's height) there is nothing to choose: the heuristic plays (its
-plunge and nudges too).
+It decides at the moments a choice matters: by default (``decide="flips"``) where the scripted
+heuristic would begin a flip with a ball low, so about once a shot (with ``decide="steps"``, at
+every step while a ball is low). To decide, it saves the game it plays (``clone_state``,
+without the env's random stream: the look-ahead does not see the draws to come, of the sticky
+actions or the launches), branches it into a small native vector env, one env per candidate
+plan, and plays every branch ``horizon`` steps on, each drawing what it draws (a launch's
+speed, a serve) from one stream seeded by the game's frame count: the same draws for every
+plan, and the same decision from the same game wherever it is taken. A plan is the scripted
+heuristic (``HeuristicPolicy``, each branch its own copy as it is now) with, first, one flipper
+action (none, left, right, both) held for ``hold`` steps, or with another ``aim`` (where on a
+flipper it shoots a ball rolling down it, a share of the flipper's length); one plan is the
+heuristic as it is. Each branch is scored by the points it made, less ``drain_cost`` for each
+ball it lost, and the best plan (ties go to the heuristic's, then to the order of the plans)
+plays as it played in its branch for its hold, at least ``decide_every`` steps, before the next
+decision may come; a chosen aim stays the heuristic's until another is chosen. The look-ahead
+plays without sticky actions (a planner cannot know the draws); the game it chooses for plays
+under whatever the env has (the benchmark protocol's sticky actions act on the actions it
+plays). While no ball in play is below ``low`` (a share of the table's height) there is nothing
+to choose: the heuristic plays (its plunge and nudges too).
 
 Its compute per decision is the settings': ``1 + len(aims) + 4 * len(holds)`` branches of
 ``horizon`` steps each. It is a reference of what looking ahead in the simulator reaches (the
@@ -123,7 +124,10 @@ class Planner:
         branch's heuristic a fork of ``heuristic`` (the player's, as it is)."""
         self.decisions += 1
         plans = self.plans
-        _, infos = self.branches.restore_state(state)
+        # Every branch draws (launches, serves) from one stream seeded by the game's frame:
+        # the same draws for every plan, and the same decision from the same game anywhere.
+        stream = np.random.default_rng(int(info["frames"])).bit_generator.state
+        _, infos = self.branches.restore_state(dataclasses.replace(state, rng=stream))
         players = [heuristic.fork() for _ in plans]
         for player, plan in zip(players, plans, strict=True):
             if plan.aim is not None:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pinball_env.players import HeuristicPolicy, SearchPolicy, SearchSettings, VectorSearch
-from pinball_env.players.search import Plan
+from pinball_env.players.search import Plan, Planner
 
 SMALL = SearchSettings(horizon=6, holds=(2,))
 
@@ -181,3 +181,20 @@ def test_the_vector_search_refuses_generated_tables():
     venv = gym.make_vec("PinballProcgen-v0", num_envs=1, vectorization_mode="vector_entry_point")
     with pytest.raises(ValueError, match="fixed table"):
         VectorSearch(venv)
+
+
+def test_the_branches_draw_the_same_from_the_same_game_in_any_planner():
+    # The branches draw (here the plunger's launch, 56 frames into the game) from a stream
+    # seeded by the game's frame, not from their env's own: two planners, each with branch
+    # envs of their own, play every branch to the same end.
+    env = gym.make("Pinball-v3")
+    _, info = env.reset(seed=3)
+    state, table = env.unwrapped.clone_state(), env.unwrapped.table
+    kwargs = env.unwrapped.options.to_kwargs()
+    ends = []
+    for _ in range(2):
+        planner = Planner("Pinball-v3", kwargs, table, SearchSettings(horizon=120, holds=(2,)))
+        planner.best(state, info, HeuristicPolicy(table))
+        ends.append(planner.branches.step(np.zeros(len(planner.plans), dtype=np.int64))[0])
+        planner.close()
+    assert (ends[0] == ends[1]).all()
