@@ -16,6 +16,7 @@ from agents.benchmark.plots import plot_benchmark
 from agents.benchmark.tables import markdown_table
 from agents.config import ConfigError, load_run_config
 from agents.evaluation import PROTOCOL_EVAL
+from agents.rollouts import BASELINES
 from agents.runs import (
     MODEL_FILE,
     best_validation,
@@ -165,7 +166,7 @@ def aggregate_table(
     methods = {name: result for name, result in results.items() if result is not None}
     reference: dict[str, dict[str, float]] = {}
     for name, result in methods.items():
-        if METHODS[name].baseline is not None:
+        if METHODS[name].baseline in BASELINES:  # (the normalisation's 0 and 1: not the planner)
             reference.setdefault(result["env_id"], {})[METHODS[name].baseline] = result[
                 "score_mean"
             ]
