@@ -591,13 +591,9 @@ def algorithm_class(name: str) -> type:
     import sb3_contrib
     import stable_baselines3
 
-    return {
-        "ppo": stable_baselines3.PPO,
-        "a2c": stable_baselines3.A2C,
-        "dqn": stable_baselines3.DQN,
-        "recurrent_ppo": sb3_contrib.RecurrentPPO,
-        "qrdqn": sb3_contrib.QRDQN,
-    }[name]
+    return {"ppo": stable_baselines3.PPO, "a2c": stable_baselines3.A2C,
+            "dqn": stable_baselines3.DQN, "recurrent_ppo": sb3_contrib.RecurrentPPO,
+            "qrdqn": sb3_contrib.QRDQN}[name]  # fmt: skip
 
 
 def save_config(config: AnyConfig, path: Path) -> None:

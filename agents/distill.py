@@ -45,7 +45,7 @@ from agents.config import (
     config_from_dict,
     read_config_data,
 )
-from agents.envs import make_env_chain
+from agents.envs import make_env_chain, native_env
 from agents.imitation import fit_policy
 from agents.runs import CHECKPOINTS, atomic_write, save_model, say
 from agents.train import keep_best, set_threads, start
@@ -191,10 +191,7 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
     run = start(learner, runs, command)
     (run / DISTILL_FILE).write_text(yaml.safe_dump(dataclasses.asdict(config), sort_keys=False))
     venv = make_env_chain(learner, seed=SEED_STRIDE * config.seed)
-    native = venv
-    while not hasattr(native, "clone_state"):
-        native = native.venv
-    search = VectorSearch(native, SearchSettings(**config.teacher))
+    search = VectorSearch(native_env(venv), SearchSettings(**config.teacher))
     model = PPO(learner.policy, venv, seed=config.seed, device=learner.device, verbose=0,
                 learning_rate=config.learning_rate,
                 policy_kwargs={"net_arch": list(config.net_arch)})  # fmt: skip

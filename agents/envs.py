@@ -64,6 +64,13 @@ def make_env_chain(
     return venv
 
 
+def native_env(venv: Any) -> Any:
+    """The native vector env (``PinballVectorEnv``) at the bottom of an SB3 env chain."""
+    while not hasattr(venv, "clone_state"):
+        venv = venv.venv
+    return venv
+
+
 def frozen_observations(venv: Any, normalise: Callable[[np.ndarray], np.ndarray]) -> Any:
     """``venv`` with its observations (and terminal observations) passed through
     ``normalise``: a saved policy's frozen statistics, rewards left raw."""

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from agents.config import AnyConfig, ConfigError, TrainConfig, config_from_dict
-from agents.envs import make_env_chain
+from agents.envs import make_env_chain, native_env
 from agents.policy import ObsNormalization, Predictor, load_policy
 from pinball_env.players import HeuristicPolicy, RandomPolicy, VectorSearch
 
@@ -84,10 +84,7 @@ def search_policy(venv: Any) -> VecPolicy:
     """The planner (``players.VectorSearch``, its default settings) over the native vector env
     at the bottom of ``venv``; an env whose game ended plays no more (its player rests: the
     rollouts keep only each env's first game)."""
-    native = venv
-    while not hasattr(native, "clone_state"):
-        native = native.venv
-    search = VectorSearch(native)
+    search = VectorSearch(native_env(venv))
     ended = np.zeros(venv.num_envs, dtype=bool)
 
     def policy(obs: np.ndarray, infos: list[dict[str, Any]]) -> np.ndarray:
