@@ -23,6 +23,12 @@ config's env). The run's ``distill.yaml`` is this config and ``distill.csv`` a r
 iteration: the games and steps played, the share of the learner's actions the teacher agreed
 with, the learner's (or the teacher's) mean score on its games, the data set, the fit's
 accuracy, the validation's score and the seconds.
+
+The frames a run trains on count every frame it simulates but the validations': the games of
+its iterations and every branch of the planner's look-ahead (the planner's frames are most of
+them). ``total_frames`` (0: none) is a ceiling: an iteration runs only while one as long as the
+last still fits under it (the first always runs). ``meta.json``'s ``trained`` has the frames
+and the learner's steps, as a trained run's.
 """
 
 import csv
@@ -48,7 +54,7 @@ from agents.config import (
 from agents.envs import make_env_chain, native_env
 from agents.imitation import fit_policy
 from agents.runs import CHECKPOINTS, atomic_write, save_model, say
-from agents.train import keep_best, set_threads, start
+from agents.train import keep_best, record_trained, set_threads, start
 from agents.validation import Validation
 from pinball_env.players import SearchSettings, VectorSearch
 from pinball_env.protocol import EVAL_SEEDS
@@ -69,6 +75,8 @@ class DistillConfig:
     """Seed of the network's start, the minibatches and the training games."""
     iterations: int = 6
     """Rounds of play, label and fit (the first played by the teacher)."""
+    total_frames: int = 0
+    """The frames the run may simulate, the planner's included (0: no ceiling; docstring)."""
     epochs: int = 4
     """Passes over the data set at each fit."""
     learning_rate: float = 1e-3
@@ -87,6 +95,10 @@ class DistillConfig:
     torch_threads: int = 1
     env_threads: int = 1
     notes: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The config as its YAML file has it (the run's ``distill.yaml``)."""
+        return dataclasses.asdict(self)
 
     def learner(self) -> TrainConfig:
         """The learner's config (the run's ``config.yaml``): PPO's policy network on the env."""
@@ -109,8 +121,9 @@ class DistillConfig:
         for key in ("iterations", "epochs", "batch_size", "validate_episodes"):
             if not (isinstance(getattr(self, key), int) and getattr(self, key) >= 1):
                 fail(f"{key}: must be an integer >= 1, got {getattr(self, key)!r}")
-        if not (isinstance(self.seed, int) and self.seed >= 0):
-            fail(f"seed: must be an integer >= 0, got {self.seed!r}")
+        for key in ("seed", "total_frames"):
+            if not (isinstance(getattr(self, key), int) and getattr(self, key) >= 0):
+                fail(f"{key}: must be an integer >= 0, got {getattr(self, key)!r}")
         last = SEED_STRIDE * self.seed + self.iterations * self.env.num_envs
         if last > min(EVAL_SEEDS.start, self.validate_seed) or last > SEED_STRIDE * (self.seed + 1):
             fail(f"seed {self.seed} x {self.iterations} iterations of {self.env.num_envs} games "
@@ -132,11 +145,18 @@ def load_distill_config(path: Path, overrides: list[str] = ()) -> DistillConfig:
     data = read_config_data(Path(path))
     for item in overrides:
         apply_override(data, item, path)
+    return distill_config_from_dict(data, str(path))
+
+
+def distill_config_from_dict(data: dict[str, Any], source: str) -> DistillConfig:
+    """The distillation config of ``data`` (a YAML file's, or :meth:`DistillConfig.to_dict`'s),
+    checked; ``source`` names it in errors."""
+    data = dict(data)
     env = data.pop("env", {}) or {}
-    check_keys(data, DistillConfig, str(path), "")
-    check_keys(env, EnvConfig, str(path), "env.")
+    check_keys(data, DistillConfig, source, "")
+    check_keys(env, EnvConfig, source, "env.")
     config = DistillConfig(**data, env=EnvConfig(**env))
-    config.check(str(path))
+    config.check(source)
     return config
 
 
@@ -155,7 +175,8 @@ class Iteration:
     def play(self, learner: Any | None) -> dict[str, Any]:
         n = self.venv.num_envs
         raw = getattr(self.venv, "get_original_obs", lambda: self.obs)  # (unnormalised)
-        observations, labels, scores = [], [], np.full(n, -1.0)
+        observations, labels = [], []
+        scores, frames = np.full(n, -1.0), np.zeros(n, dtype=np.int64)
         agreed = steps = 0
         playing = np.ones(n, dtype=bool)
         while playing.any():
@@ -177,8 +198,10 @@ class Iteration:
                 if "episode" in self.infos[env]:
                     playing[env] = False
                     scores[env] = float(self.infos[env]["score"])
+                    frames[env] = int(self.infos[env]["frames"])
         return {"obs": np.concatenate(observations), "labels": np.concatenate(labels),
-                "steps": steps, "agreement": agreed / steps if learner is not None else 1.0,
+                "steps": steps, "frames": int(frames.sum()),
+                "agreement": agreed / steps if learner is not None else 1.0,
                 "score_mean": float(scores.mean())}  # fmt: skip
 
 
@@ -189,7 +212,7 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
     learner = config.learner()
     set_threads(learner)
     run = start(learner, runs, command)
-    (run / DISTILL_FILE).write_text(yaml.safe_dump(dataclasses.asdict(config), sort_keys=False))
+    (run / DISTILL_FILE).write_text(yaml.safe_dump(config.to_dict(), sort_keys=False))
     venv = make_env_chain(learner, seed=SEED_STRIDE * config.seed)
     search = VectorSearch(native_env(venv), SearchSettings(**config.teacher))
     model = PPO(learner.policy, venv, seed=config.seed, device=learner.device, verbose=0,
@@ -199,9 +222,12 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
     data_obs: list[np.ndarray] = []
     data_labels: list[np.ndarray] = []
     rows: list[dict[str, Any]] = []
-    n, frames = venv.num_envs, 0
+    n, frames, last = venv.num_envs, 0, 0
     for k in range(config.iterations):
-        started = time.monotonic()
+        if k > 0 and config.total_frames and frames + last > config.total_frames:
+            say(f"{frames} frames: another iteration would pass total_frames; stopping")
+            break
+        started, planned = time.monotonic(), search.planner.branch_frames
         if hasattr(venv, "training"):
             venv.training = k == 0  # (the statistics of the teacher's games, then frozen)
         first = SEED_STRIDE * config.seed + k * n
@@ -215,12 +241,13 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
                             config.epochs, config.seed + k, batch_size=config.batch_size,
                             class_weights=class_weights(labels, venv.action_space.n,
                                                         config.balance))  # fmt: skip
-        frames += games["steps"] * learner.env.frame_skip
+        last = games["frames"] + search.planner.branch_frames - planned
+        frames += last
         model.num_timesteps += games["steps"]
         save_model(model, run / CHECKPOINTS, f"iteration_{k}", learner)
         validated = validation(model, frames)
         rows.append({"iteration": k, "player": "teacher" if k == 0 else "learner",
-                     "games": n, "steps": games["steps"],
+                     "games": n, "steps": games["steps"], "frames": last,
                      "agreement": round(games["agreement"], 4),
                      "score_mean": round(games["score_mean"], 1), "data": len(obs),
                      "accuracy": round(fitted["accuracy"], 4),
@@ -230,6 +257,7 @@ def distill(config: DistillConfig, runs: Path, command: list[str]) -> Path:
         say(f"iteration {k}: {rows[-1]}")
     validation.close()
     assert validation.best is not None
+    record_trained(run, model.num_timesteps, frames)
     keep_best(run, validation.best)
     search.close()
     venv.close()

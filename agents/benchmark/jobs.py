@@ -14,13 +14,16 @@ import tarfile
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.benchmark.methods import CONFIGS, METHODS, SCALED_BY_BUDGET, TINY_FRAMES, trained_by
-from agents.config import ConfigError, TrainConfig, config_from_dict, load_config, load_run_config
+from agents.config import ConfigError, config_from_dict, load_config, load_run_config
 from agents.evaluation import PROTOCOL_EVAL, evaluate_protocol, player_for
 from agents.runs import MODEL_FILE, latest_checkpoint, source_commit
 from pinball_env import protocol
+
+if TYPE_CHECKING:
+    from agents.benchmark.methods import JobConfig
 
 COMMIT_VARIABLE = "PINBALL_SOURCE_COMMIT"  # a cluster node's commit: the driver's (agents.runs)
 JOB_FILE = "job.json"  # in OUT/METHOD/seedS: where and how long the job trained and evaluated
@@ -45,23 +48,48 @@ def job_folder(settings: JobSettings, name: str, seed: int) -> Path:
     return settings.out / name / f"seed{seed}" if METHODS[name].trained else settings.out / name
 
 
-def job_config(name: str, seed: int, settings: JobSettings) -> TrainConfig:
+def job_config(name: str, seed: int, settings: JobSettings) -> "JobConfig":
     """The training config of a job: the method's config, seed ``seed``, the method's budget in
     frames and no time limit (and ``--tiny``'s settings). On a budget above the protocol's
-    first, the config's ``SCALED_BY_BUDGET`` keys are scaled by the budget's ratio to it."""
+    first, the config's ``SCALED_BY_BUDGET`` keys are scaled by the budget's ratio to it. A
+    distilled method's: its distillation config, the budget its ``total_frames``."""
     method = METHODS[name]
+    tiny = method.tiny if settings.tiny else ()
+    if method.distilled:
+        from agents.distill import load_distill_config
+
+        return load_distill_config(
+            method.config_path, [f"seed={seed}", f"total_frames={settings.frames(name)}", *tiny]
+        )
     overrides = [f"seed={seed}", "max_minutes=0", f"total_frames={settings.frames(name)}"]
     if method.frames != protocol.TRAINING_FRAMES and not settings.tiny:
-        config = load_config(CONFIGS / method.config)
+        config = load_config(method.config_path)
         ratio = method.frames // protocol.TRAINING_FRAMES
         overrides += [f"{key}={getattr(config, key) * ratio}" for key in SCALED_BY_BUDGET]
-    return load_config(
-        CONFIGS / method.config, [*overrides, *(method.tiny if settings.tiny else ())]
-    )
+    return load_config(method.config_path, [*overrides, *tiny])
+
+
+def run_config(name: str, run: Path) -> "JobConfig":
+    """The config a run of method ``name`` was trained with (a distillation's: its own)."""
+    if METHODS[name].distilled:
+        from agents.distill import DISTILL_FILE, load_distill_config
+
+        return load_distill_config(run / DISTILL_FILE)
+    return load_run_config(run)
+
+
+def config_of_data(name: str, data: dict[str, Any]) -> "JobConfig":
+    """The config of method ``name`` from its ``to_dict()`` (a cluster node's, which has no
+    configs/)."""
+    if METHODS[name].distilled:
+        from agents.distill import distill_config_from_dict
+
+        return distill_config_from_dict(data, f"{name}'s config")
+    return config_from_dict(data)
 
 
 def job_run(
-    name: str, seed: int, settings: JobSettings, config: TrainConfig | None = None
+    name: str, seed: int, settings: JobSettings, config: "JobConfig | None" = None
 ) -> Path | None:
     """The run folder of a job (None before it starts); ConfigError if it holds another config
     than the job's (``config``, by default :func:`job_config`'s) or several runs."""
@@ -72,7 +100,7 @@ def job_run(
     if not runs:
         return None
     expected = config or job_config(name, seed, settings)
-    found, wanted = trained_by(load_run_config(runs[0])), trained_by(expected)
+    found, wanted = trained_by(run_config(name, runs[0])), trained_by(expected)
     differ = sorted(key for key in found | wanted if found.get(key) != wanted.get(key))
     if differ:
         raise ConfigError(
@@ -84,7 +112,7 @@ def job_run(
 
 
 def job_done(
-    name: str, seed: int, settings: JobSettings, config: TrainConfig | None = None
+    name: str, seed: int, settings: JobSettings, config: "JobConfig | None" = None
 ) -> bool:
     """The job's evaluation of this benchmark's games is written (so its training finished)."""
     if METHODS[name].trained:
@@ -100,7 +128,7 @@ def job_done(
     return json.loads(summary.read_text())["seeds"] == [first, first + settings.episodes - 1]
 
 
-def run_job(name: str, seed: int, settings: JobSettings, config: TrainConfig | None = None) -> Path:
+def run_job(name: str, seed: int, settings: JobSettings, config: "JobConfig | None" = None) -> Path:
     """Train (or go on training) and evaluate one method x seed; returns its results folder.
     A finished job is left as it is. ``config``: the job's training config (by default
     :func:`job_config`'s; a cluster node gets it from the driver, it has no configs/)."""
@@ -114,6 +142,8 @@ def run_job(name: str, seed: int, settings: JobSettings, config: TrainConfig | N
         _evaluate_job(folder, settings, folder / PROTOCOL_EVAL, policy=method.baseline,
                       env=method.env_id)  # fmt: skip
         return folder
+    if method.distilled:
+        return _distill_job(name, seed, settings, config)
     from agents.train import start, train
 
     run = job_run(name, seed, settings, config)
@@ -130,6 +160,26 @@ def run_job(name: str, seed: int, settings: JobSettings, config: TrainConfig | N
             train(config, run, resume=resume, progress_bar=False)
         finally:  # a stopped job's minutes count in the run's, which goes on from its checkpoint
             _log_job(folder, train_seconds=time.monotonic() - training_started)
+    _evaluate_job(folder, settings, run / PROTOCOL_EVAL, model_path=run)
+    return folder
+
+
+def _distill_job(name: str, seed: int, settings: JobSettings, config: Any) -> Path:
+    """:func:`run_job` of a distilled method: distilled (anew, where a run stopped before its
+    model: a distillation does not go on from a checkpoint) and evaluated."""
+    from agents.distill import distill
+
+    folder, run = job_folder(settings, name, seed), job_run(name, seed, settings, config)
+    if run is not None and not (run / MODEL_FILE).is_file():
+        shutil.rmtree(run)
+        (folder / JOB_FILE).unlink(missing_ok=True)
+        run = None
+    if run is None:
+        started = time.monotonic()
+        try:
+            run = distill(config, folder, ["agents.benchmark", name, f"seed={seed}"])
+        finally:
+            _log_job(folder, train_seconds=time.monotonic() - started)
     _evaluate_job(folder, settings, run / PROTOCOL_EVAL, model_path=run)
     return folder
 
@@ -226,7 +276,7 @@ def remote_job(
         if partial:
             unpack(partial, folder)
         try:
-            run_job(name, seed, here, None if config is None else config_from_dict(config))
+            run_job(name, seed, here, None if config is None else config_of_data(name, config))
         except Exception as error:  # the folder comes back all the same: a rerun goes on
             return pack(folder), node, f"{type(error).__name__}: {error}"
         return pack(folder), node, None

@@ -5,25 +5,34 @@ import dataclasses
 import hashlib
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.config import RENAMED_KEYS, TrainConfig
 from pinball_env import protocol
 
+if TYPE_CHECKING:
+    from agents.distill import DistillConfig
+
+    JobConfig = TrainConfig | DistillConfig  # a method's: agents.train's or agents.distill's
+
 CONFIGS = Path(__file__).resolve().parents[2] / "configs" / "agents"
+DISTILL_CONFIGS = CONFIGS.parent / "distill"
 
 
 @dataclasses.dataclass(frozen=True)
 class Method:
     """A row of the benchmark: a training ``config`` (a file of configs/agents) trained for
     ``frames`` (one of the protocol's ``TRAINING_BUDGETS``) or a ``baseline``, on ``env_id``;
-    ``tiny``: the overrides of ``--tiny``."""
+    ``tiny``: the overrides of ``--tiny``. ``distilled``: trained by ``agents.distill`` from the
+    planner (``config`` a file of configs/distill), for which ``frames`` is a ceiling that
+    counts the planner's look-ahead, where ``agents.train`` trains to the budget."""
 
     env_id: str
     config: str | None = None
     baseline: str | None = None
     tiny: tuple[str, ...] = ()
     frames: int = protocol.TRAINING_FRAMES
+    distilled: bool = False
 
     def __post_init__(self) -> None:
         if self.frames not in protocol.TRAINING_BUDGETS:
@@ -33,6 +42,11 @@ class Method:
     def trained(self) -> bool:
         return self.config is not None
 
+    @property
+    def config_path(self) -> Path:
+        assert self.config is not None
+        return (DISTILL_CONFIGS if self.distilled else CONFIGS) / self.config
+
 
 # Small settings for --tiny: a few updates of small networks.
 _TINY = ("imitation_steps=0", "validate_every=0", "checkpoint_every=0", "env.num_envs=2")
@@ -41,6 +55,8 @@ _TINY_PPO = (*_TINY, "hyperparams.n_steps=64", "hyperparams.batch_size=64",
 _TINY_A2C = (*_TINY, "hyperparams.n_steps=8")
 _TINY_DQN = (*_TINY, "hyperparams.learning_starts=200", "hyperparams.buffer_size=2000",
              "hyperparams.batch_size=64")  # fmt: skip
+_TINY_DISTILL = ("iterations=1", "env.num_envs=1", "epochs=1", "validate_episodes=1",
+                 "teacher.horizon=8", "teacher.aims=[]")  # fmt: skip
 
 METHODS: dict[str, Method] = {
     "random-v3": Method("Pinball-v3", baseline="random"),
@@ -52,6 +68,8 @@ METHODS: dict[str, Method] = {
     ),
     # The planner (players.search): a reference that looks ahead in the simulator, not a learner.
     "search-v3": Method("Pinball-v3", baseline="search"),
+    # The planner distilled into a policy (agents.distill: DAgger), which plays without it.
+    "dagger-v3": Method("Pinball-v3", "search_v3.yaml", tiny=_TINY_DISTILL, distilled=True),
     "random-v2": Method("Pinball-v2", baseline="random"),
     "heuristic-v2": Method("Pinball-v2", baseline="heuristic"),
     "search-v2": Method("Pinball-v2", baseline="search"),
@@ -95,7 +113,7 @@ LATER_KEYS = {"kl_anchor_coef": 0.0}
 DIGEST_NAMES = {new: old for old, new in RENAMED_KEYS.items()}
 
 
-def trained_by(config: TrainConfig) -> dict[str, Any]:
+def trained_by(config: "JobConfig") -> dict[str, Any]:
     """What of a config trains, flat: all of it but its ``notes`` (words do not train) and the
     later keys at their defaults (``LATER_KEYS``), renamed keys under their published names
     (``DIGEST_NAMES``)."""
@@ -105,7 +123,7 @@ def trained_by(config: TrainConfig) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def config_digest(config: TrainConfig) -> str:
+def config_digest(config: "JobConfig") -> str:
     """A short digest of what of ``config`` trains: a run of another config has another."""
     text = json.dumps(trained_by(config), sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]

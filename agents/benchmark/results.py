@@ -6,15 +6,23 @@ import csv
 import json
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from agents.benchmark.jobs import JOB_FILE, JobSettings, job_config, job_done, job_folder, job_run
+from agents.benchmark.jobs import (
+    JOB_FILE,
+    JobSettings,
+    job_config,
+    job_done,
+    job_folder,
+    job_run,
+    run_config,
+)
 from agents.benchmark.methods import METHODS, TINY_FRAMES, config_digest
 from agents.benchmark.plots import plot_benchmark
 from agents.benchmark.tables import markdown_table
-from agents.config import ConfigError, load_run_config
+from agents.config import ConfigError
 from agents.evaluation import PROTOCOL_EVAL
 from agents.rollouts import BASELINES
 from agents.runs import (
@@ -26,6 +34,9 @@ from agents.runs import (
     validation_rows,
 )
 from pinball_env import protocol
+
+if TYPE_CHECKING:
+    from agents.benchmark.methods import JobConfig
 
 # Runs of earlier benchmarks (--merge): per method, its runs as benchmark.json has them.
 Merged = dict[str, list[dict[str, Any]]]
@@ -54,7 +65,7 @@ def method_results(
             "scores": scores,
             "score_mean": float(np.mean(scores)),
             "score_iqm": protocol.iqm(scores),
-            **(_training(run, job) if method.trained else {}),
+            **(_training(run, job, run_config(name, run)) if method.trained else {}),
             # Seconds its games took to play (the planner's are its compute).
             **({"play_seconds": round(job["evaluate_seconds"], 1)}
                if "evaluate_seconds" in job else {}),
@@ -115,7 +126,7 @@ def merged_run(merged: Merged | None, name: str, seed: int | None) -> dict[str, 
     return next((run for run in (merged or {}).get(name, []) if run["seed"] == wanted), None)
 
 
-def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
+def _training(run: Path, job: dict[str, Any], config: "JobConfig") -> dict[str, Any]:
     """A run's frames and steps trained, its minutes of training (the job's record, or for a run
     trained outside the benchmark, from its start to its model), its best validation score (its
     model's) and every validation (its learning curve), its commit and its config's digest."""
@@ -127,7 +138,7 @@ def _training(run: Path, job: dict[str, Any]) -> dict[str, Any]:
         "steps": max((int(float(row["time/total_timesteps"])) for row in rows), default=0),
     }  # fmt: skip
     frames, steps = trained["frames"], trained["steps"]
-    digest = config_digest(load_run_config(run))
+    digest = config_digest(config)
     rows = validation_rows(run)
     validated = best_validation(rows)
     seconds = job.get("train_seconds")

@@ -103,8 +103,8 @@ class SearchSettings:
 
 class Planner:
     """The look-ahead (module docstring) for games of one env id, options and table: a native
-    vector env of one branch per plan of ``settings``. ``decisions`` and ``branch_steps``
-    count its work."""
+    vector env of one branch per plan of ``settings``. ``decisions``, ``branch_steps`` and
+    ``branch_frames`` count its work."""
 
     def __init__(
         self, env_id: str, kwargs: Mapping[str, Any], table: Table, settings: SearchSettings
@@ -114,7 +114,7 @@ class Planner:
         kwargs = {**kwargs, "render_mode": None, "repeat_action_probability": 0.0}
         self.branches: Any = gym.make_vec(env_id, num_envs=len(self.plans), num_threads=1,
                                           **kwargs)  # fmt: skip
-        self.decisions = self.branch_steps = 0
+        self.decisions = self.branch_steps = self.branch_frames = 0
 
     def close(self) -> None:
         self.branches.close()
@@ -142,8 +142,10 @@ class Planner:
                                                 if key in infos}  # fmt: skip
                 scripted = int(players[k](seen))  # (each copy sees its own branch)
                 actions[k] = plan.action if plan.action >= 0 and step < plan.hold else scripted
+            frames = infos["frames"]
             _, _, terminated, truncated, infos = self.branches.step(actions)
             self.branch_steps += int(live.sum())
+            self.branch_frames += int((infos["frames"] - frames)[live].sum())
             gain = infos["score"] - start_score
             lost = start_balls - infos["balls_left"]
             value = np.where(live, gain - self.settings.drain_cost * lost, value)
@@ -172,6 +174,10 @@ class SearchPlayer:
     @property
     def branch_steps(self) -> int:
         return self.planner.branch_steps
+
+    @property
+    def branch_frames(self) -> int:
+        return self.planner.branch_frames
 
     def reset(self) -> None:
         """A new game: the heuristic forgets the last, and takes its own aim again."""

@@ -71,6 +71,24 @@ def test_the_look_ahead_leaves_the_game_and_its_stream_as_they_are(env_id):
         if terminated or truncated:
             break
     assert player.decisions > 0 and player.branch_steps > 0
+    assert player.branch_frames == player.branch_steps  # (one frame a step: no skips)
+    player.close()
+
+
+@pytest.mark.parametrize("skip_above", [0.0, 0.45])
+def test_the_branch_frames_count_the_frames_each_step_plays(skip_above):
+    # What a distillation's budget counts: every frame its branches play (2 a step at frame
+    # skip 2; more with skip_above, whose steps run on while no ball is low).
+    env = gym.make("Pinball-v3", frame_skip=2, skip_above=skip_above)
+    player = SearchPolicy(env, SearchSettings(horizon=30, holds=(2,)))
+    _, info = env.reset(seed=5)
+    for _ in range(400):
+        info = env.step(player(info))[-1]
+    assert player.branch_steps > 0
+    if skip_above:
+        assert player.branch_frames > 2 * player.branch_steps
+    else:
+        assert player.branch_frames == 2 * player.branch_steps
     player.close()
 
 

@@ -110,6 +110,33 @@ def test_a_learning_curve_is_the_mean_normalised_iqm_over_the_runs_at_each_valid
     )
 
 
+def test_a_distilled_method_is_distilled_from_the_planner_and_counts_its_frames(tmp_path):
+    # dagger-v3: agents.distill, not agents.train; its frames are its games' and the planner's
+    # look-ahead's (distill.csv's), under the budget's ceiling (tiny: the first iteration only);
+    # its model played the protocol's games as a trained one (load_policy).
+    argv = ["--tiny", "--out", str(tmp_path), "--methods", "dagger-v3", "--seeds", "0"]
+    table = cli.main(argv)
+    (run,) = table["methods"]["dagger-v3"]["runs"]
+    folder = tmp_path / run["run"]
+    with open(folder / "distill.csv") as file:
+        iterations = list(csv.DictReader(file))
+    assert (
+        run["frames"] == sum(int(row["frames"]) for row in iterations) > int(iterations[0]["steps"])
+    )  # (the planner's branches in it)
+    assert run["steps"] == sum(int(row["steps"]) for row in iterations)
+    assert run["validations"] == [[r["frames"], r["score_mean"], r["score_iqm"]]
+                                  for r in validation_rows(folder)]  # fmt: skip
+    settings = jobs.JobSettings(tmp_path, methods.TINY_EPISODES, tiny=True)
+    config = jobs.job_config("dagger-v3", 0, settings)
+    assert config.total_frames == methods.TINY_FRAMES and config.seed == 0
+    assert run["config_digest"] == methods.config_digest(config)
+    assert jobs.job_done("dagger-v3", 0, settings)
+    assert cli.main(argv)["methods"]["dagger-v3"]["runs"][0]["scores"] == run["scores"]  # (done)
+    # A run of another distillation config in its folder is refused, as a trained run's.
+    with pytest.raises(ConfigError, match=r"another config than dagger-v3 seed 0 .*seed: 0, not 1"):
+        jobs.job_run("dagger-v3", 0, settings, dataclasses.replace(config, seed=1))
+
+
 def test_a_method_on_the_long_budget_trains_its_config_ten_times_as_long(tmp_path):
     settings = jobs.JobSettings(tmp_path)
     short = jobs.job_config("ppo-scale-v2", 3, settings)
@@ -242,10 +269,15 @@ def test_the_published_results_are_of_the_protocol_and_configs_of_today(tmp_path
         runs = result["runs"]
         assert [run["scores"] for run in merged[name]] == [run["scores"] for run in runs]
         assert all(len(run["scores"]) == len(protocol.EVAL_SEEDS) for run in runs)
-        if methods.METHODS[name].trained:
+        method = methods.METHODS[name]
+        if method.trained:
             assert len(runs) >= 3 and all(run["commit"] for run in runs)
-            budget = methods.METHODS[name].frames
-            assert all(run["frames"] >= 0.99 * budget for run in runs)
+            for run in runs:  # trained to the budget; distilled under it (a ceiling)
+                assert (
+                    run["frames"] <= method.frames
+                    if method.distilled
+                    else (run["frames"] >= 0.99 * method.frames)
+                )
         # Its metrics are those of its scores.
         metrics = protocol.aggregate([run["scores"] for run in runs], result["env_id"])
         assert metrics.pop("runs") == len(runs)
