@@ -171,21 +171,29 @@ def fall_time(height: float, vy: float, gy: float) -> float:
     return 2.0 * height / (math.sqrt(root) - vy)
 
 
-def most_urgent(info: Mapping[str, Any], gy: float) -> tuple[np.ndarray, np.ndarray]:
+Ball = tuple[float, float, float, float]  # x, y [m], vx, vy [m/s]
+
+
+def urgent_balls(info: Mapping[str, Any], gy: float) -> list[Ball]:
     """The balls in play of a game of several balls (``info``'s ``ball_positions``,
-    ``ball_velocities``, ``balls_in_play``), (K, 2) positions and velocities, the most urgent
-    first: the soonest to fall to the flippers' level (the lowest, where they fall as fast); the
-    game's ball (``ball_position``) where none is in play."""
-    playing = np.asarray(info["balls_in_play"], dtype=bool)
-    if not playing.any():
-        return (np.asarray(info["ball_position"])[None],
-                np.asarray(info["ball_velocity"])[None])  # fmt: skip
-    position = np.asarray(info["ball_positions"])[playing]
-    velocity = np.asarray(info["ball_velocities"])[playing]
-    times = [fall_time(max(float(p[1]), 0.0), float(v[1]), gy)
-             for p, v in zip(position, velocity, strict=True)]  # fmt: skip
-    order = np.argsort(times, kind="stable")
-    return position[order], velocity[order]
+    ``ball_velocities``, ``balls_in_play``) as (x, y, vx, vy), the most urgent first: the
+    soonest to fall to the flippers' level (the lowest, where they fall as fast); the game's
+    ball (``ball_position``) where none is in play. (Python floats: the heuristic asks every
+    step, of a few balls, for which numpy's calls would cost more than the arithmetic.)"""
+    playing = np.asarray(info["balls_in_play"]).tolist()
+    if not any(playing):
+        return game_ball(info)
+    positions = np.asarray(info["ball_positions"]).tolist()
+    velocities = np.asarray(info["ball_velocities"]).tolist()
+    balls = [(*p, *v) for p, v, live in zip(positions, velocities, playing, strict=True) if live]
+    return sorted(balls, key=lambda ball: fall_time(max(ball[1], 0.0), ball[3], gy))  # stable
+
+
+def game_ball(info: Mapping[str, Any]) -> list[Ball]:
+    """The game's ball (``info``'s ``ball_position`` and ``ball_velocity``), alone."""
+    (x, y), (vx, vy) = (np.asarray(info[key]).tolist()
+                        for key in ("ball_position", "ball_velocity"))  # fmt: skip
+    return [(x, y, vx, vy)]
 
 
 class HeuristicPolicy:
@@ -270,6 +278,7 @@ class HeuristicPolicy:
         self.post_reach = post_reach
         self.post_lead = post_lead
         self._shoves: list[tuple[int, float, float]] = []  # (frame, dx, dy) of its own nudges
+        self._cabinet_buttons = len(button_names(cabinet=True)) - len(BUTTONS)
         if self.cabinet:
             self._prepare_cabinet(table, tilt_margin)
 
@@ -352,13 +361,17 @@ class HeuristicPolicy:
     def buttons(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
         """The buttons (one per entry of ``BUTTONS``) for a ball at ``position`` [m] moving at
         ``velocity`` [m/s]; or, given (M, 2) arrays, for several balls, the most urgent first
-        (:func:`most_urgent`): a resting flipper flips for the first ball that calls for it, a
+        (:func:`urgent_balls`): a resting flipper flips for the first ball that calls for it, a
         raised one stays up for the first that is landing on it."""
         position, velocity = np.asarray(position, float), np.asarray(velocity, float)
         balls = [(float(p[0]), float(p[1]), float(v[0]), float(v[1]))
                  for p, v in zip(position.reshape(-1, 2), velocity.reshape(-1, 2),
                                  strict=True)]  # fmt: skip
-        pressed = np.zeros(len(BUTTONS), dtype=bool)
+        return np.array(self._press(balls), dtype=bool)
+
+    def _press(self, balls: list[Ball]) -> list[bool]:
+        """:meth:`buttons` of ``balls`` (x, y, vx, vy), the most urgent first."""
+        pressed = [False] * len(BUTTONS)
         self._before = list(self._held)
         for j, held in enumerate(self._held):
             if held == 0:
@@ -378,7 +391,11 @@ class HeuristicPolicy:
         It needs the env's cabinet entries (``ball_on_plunger``, ``plunger_pull``, ``frames``,
         ``tilt_warnings``, ``tilted``): without them it neither plunges (the machine fires a
         ball left waiting) nor nudges (it could not see a warning)."""
-        pressed = np.zeros(len(button_names(cabinet=True)) - len(BUTTONS), dtype=bool)
+        return np.array(self._cabinet(info), dtype=bool)
+
+    def _cabinet(self, info: Mapping[str, Any]) -> list[bool]:
+        """:meth:`cabinet_buttons`, as a list."""
+        pressed = [False] * self._cabinet_buttons
         waiting = bool(info.get("ball_on_plunger", False))
         if self.plunge and waiting:
             pressed[0] = float(info.get("plunger_pull", 0.0)) < self._release
@@ -389,8 +406,8 @@ class HeuristicPolicy:
             self._shoves = []  # a new game (without reset): the cabinet is at rest again
         if info["tilt_warnings"] or info.get("tilted", False):
             return pressed  # a warning stands (or its model of the bob is off): no nudge
-        x, y = map(float, info["ball_position"])
-        vx, vy = map(float, info["ball_velocity"])
+        x, y = np.asarray(info["ball_position"]).tolist()
+        vx, vy = np.asarray(info["ball_velocity"]).tolist()
         direction = self._outlane_nudge(x, y, vx, vy)
         if direction is not None and self._may_shove(frame, direction):
             self._shoves.append((frame, *direction))
@@ -440,12 +457,12 @@ class HeuristicPolicy:
     def __call__(self, info: Mapping[str, Any]) -> int | np.ndarray:
         """The action for the env state described by ``info`` (from reset or step)."""
         if "balls_in_play" in info:  # several balls: those in play, the most urgent first
-            position, velocity = most_urgent(info, self.table.gravity_vector[1])
+            balls = urgent_balls(info, self.table.gravity_vector[1])
         else:
-            position, velocity = info["ball_position"], info["ball_velocity"]
-        pressed = self.buttons(position, velocity)
+            balls = game_ball(info)
+        pressed = self._press(balls)
         if self.cabinet:
-            pressed = np.concatenate([pressed, self.cabinet_buttons(info)])
+            pressed += self._cabinet(info)
         if self.action_type == "multibinary":
-            return pressed.astype(np.int8)
+            return np.array(pressed, dtype=np.int8)
         return discrete_action(pressed)
