@@ -55,7 +55,7 @@ _TINY_PPO = (*_TINY, "hyperparams.n_steps=64", "hyperparams.batch_size=64",
 _TINY_A2C = (*_TINY, "hyperparams.n_steps=8")
 _TINY_DQN = (*_TINY, "hyperparams.learning_starts=200", "hyperparams.buffer_size=2000",
              "hyperparams.batch_size=64")  # fmt: skip
-_TINY_DISTILL = ("iterations=1", "env.num_envs=1", "epochs=1", "validate_episodes=1",
+_TINY_DISTILL = ("iterations=2", "env.num_envs=1", "epochs=1", "validate_episodes=1",
                  "teacher.horizon=8", "teacher.aims=[]")  # fmt: skip
 
 METHODS: dict[str, Method] = {

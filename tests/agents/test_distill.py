@@ -2,6 +2,7 @@
 DAgger run whose model loads as any trained agent's and whose rows say what it did."""
 
 import csv
+import json
 from pathlib import Path
 
 import gymnasium as gym
@@ -25,6 +26,7 @@ def test_bad_configs_are_refused_with_the_key_that_is_wrong():
                               ("env.speed=2", "unknown key 'env.speed'"),
                               ("learning_rate=-1", "learning_rate"),
                               ("balance=1.5", "balance"),
+                              ("total_frames=-1", "total_frames"),
                               ("seed=10", "reach the validation or evaluation games"),
                               ("iterations=700", "another seed's")):  # fmt: skip
         with pytest.raises(ConfigError, match=message):
@@ -42,6 +44,10 @@ def test_a_tiny_distillation_labels_fits_validates_and_saves_a_loadable_policy(t
     # The data set aggregates: the second fit saw both iterations' steps.
     assert int(rows[1]["data"]) == int(rows[0]["steps"]) + int(rows[1]["steps"])
     assert int(rows[0]["steps"]) == 2 * 600  # (two games of 600 frames, every frame labelled)
+    # Its frames: the games' (600 each) and the planner's branches' (where it looked ahead).
+    assert int(rows[0]["frames"]) > 2 * 600 and int(rows[1]["frames"]) >= 2 * 600
+    trained = json.loads((run / "meta.json").read_text())["trained"]
+    assert trained == {"steps": 2 * 1200, "frames": sum(int(row["frames"]) for row in rows)}
     assert load_run_config(run).env.id == "Pinball-v3"
     assert distill.load_distill_config(run / distill.DISTILL_FILE) == config
     policy = load_policy(run)

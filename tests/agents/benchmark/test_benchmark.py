@@ -120,6 +120,7 @@ def test_a_distilled_method_is_distilled_from_the_planner_and_counts_its_frames(
     folder = tmp_path / run["run"]
     with open(folder / "distill.csv") as file:
         iterations = list(csv.DictReader(file))
+    assert len(iterations) == 1  # of 2: the second would pass the budget, as the first did
     assert (
         run["frames"] == sum(int(row["frames"]) for row in iterations) > int(iterations[0]["steps"])
     )  # (the planner's branches in it)
@@ -135,6 +136,11 @@ def test_a_distilled_method_is_distilled_from_the_planner_and_counts_its_frames(
     # A run of another distillation config in its folder is refused, as a trained run's.
     with pytest.raises(ConfigError, match=r"another config than dagger-v3 seed 0 .*seed: 0, not 1"):
         jobs.job_run("dagger-v3", 0, settings, dataclasses.replace(config, seed=1))
+    # One stopped before its model is distilled anew (it does not go on), to the same run.
+    (folder / MODEL_FILE).unlink()
+    again = cli.main(argv)["methods"]["dagger-v3"]["runs"][0]
+    assert again["scores"] == run["scores"] and again["run"] != run["run"]
+    assert not folder.exists()
 
 
 def test_a_method_on_the_long_budget_trains_its_config_ten_times_as_long(tmp_path):
