@@ -688,10 +688,13 @@ def test_a_page_scrubbing_a_replay_does_not_stall_another_page(serving, tmp_path
 
     shown: list[int] = []  # the scrubbing page's frames
     far = min(frames, SNAPSHOT_EVERY) - 1
+    rates = []  # (alone, beside), up to three pairs: another test's burst on the shared cores
+    # can slow one measurement; a stall slows every one
     with serving(app) as url:
-        alone = asyncio.run(frame_rate(url, scrub=False))
-        beside = asyncio.run(frame_rate(url, scrub=True))
-    assert beside >= 0.8 * alone, (alone, beside)
+        while len(rates) < 3 and not any(beside >= 0.8 * alone for alone, beside in rates):
+            alone = asyncio.run(frame_rate(url, scrub=False))
+            rates.append((alone, asyncio.run(frame_rate(url, scrub=True))))
+    assert any(beside >= 0.8 * alone for alone, beside in rates), rates
     assert {far - 1, far} <= set(shown[-30:])  # (the scrubbing page's seeks were played)
 
 
